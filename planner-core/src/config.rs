@@ -1,0 +1,349 @@
+//! The planner's configuration: every coefficient of the EAPF paper as a
+//! documented default, validated when built so that a bad configuration is an
+//! error value, never a panic.
+
+use crate::fixed::{Angle, FORCE_ONE, TRIG_ONE};
+use crate::sensors::{AdcProfile, Calibration, CalibrationError, SENSOR_COUNT};
+
+/// Why a configuration was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum ConfigError {
+    /// Robot radius outside 20 ..= 1,000 mm.
+    RobotRadius,
+    /// Sensor range outside 100 ..= 1,500 mm.
+    SensorRange,
+    /// Sensor offset (centre to sensor face) larger than 1,000 mm.
+    SensorOffset,
+    /// Sensor angles must be strictly increasing, two negative, one zero,
+    /// two positive, all within ±90°.
+    SensorAngles,
+    /// A gain outside 0 ..= 16 force units (ξ_att must be above 0).
+    Gain,
+    /// Goal tolerance outside 10 ..= 1,000 mm.
+    GoalTolerance,
+    /// A tolerance angle outside 0 ..= 30°.
+    AngleTolerance,
+    /// Clearance margin above 500 mm.
+    Clearance,
+    /// Escape parameters out of range (see [`crate::escape`]).
+    Escape,
+    /// A calibration table was refused (sensor index, reason).
+    Calibration(u8, CalibrationError),
+}
+
+/// Planner configuration. Build with [`ConfigBuilder`]; every field has the
+/// paper's value (or ours, where the paper has none) as its default.
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Config {
+    pub(crate) robot_radius_mm: u16,
+    pub(crate) sensor_offset_mm: u16,
+    pub(crate) sensor_range_mm: u16,
+    pub(crate) sensor_angles: [Angle; SENSOR_COUNT],
+    /// Q14 (cos, sin) of each sensor angle, precomputed.
+    pub(crate) sensor_dirs: [(i32, i32); SENSOR_COUNT],
+    pub(crate) xi_att: i32,
+    pub(crate) xi_mp: i32,
+    pub(crate) xi_sen: i32,
+    pub(crate) goal_tolerance_mm: u16,
+    pub(crate) clearance_mm: u16,
+    pub(crate) min_step_mm: u16,
+    pub(crate) diagonal_tolerance: Angle,
+    pub(crate) direct_tolerance: Angle,
+    pub(crate) escape: crate::escape::EscapeConfig,
+    pub(crate) calibration: [Calibration; SENSOR_COUNT],
+}
+
+impl Config {
+    /// Robot radius, mm.
+    pub fn robot_radius_mm(&self) -> u16 {
+        self.robot_radius_mm
+    }
+    /// Distance from the robot's centre to each sensor face, mm.
+    pub fn sensor_offset_mm(&self) -> u16 {
+        self.sensor_offset_mm
+    }
+    /// Sensor range, mm (from the sensor face).
+    pub fn sensor_range_mm(&self) -> u16 {
+        self.sensor_range_mm
+    }
+    /// Sensor angles in the robot frame, in sensor order.
+    pub fn sensor_angles(&self) -> [Angle; SENSOR_COUNT] {
+        self.sensor_angles
+    }
+    /// Half-width of the sensed sector: the largest |sensor angle|.
+    pub fn sector_half_width(&self) -> Angle {
+        let a = self.sensor_angles[0]
+            .abs_signed()
+            .max(self.sensor_angles[4].abs_signed());
+        Angle(a)
+    }
+    /// The calibration of sensor `i`.
+    pub fn calibration(&self, i: usize) -> Option<&Calibration> {
+        self.calibration.get(i)
+    }
+    /// Goal tolerance, mm.
+    pub fn goal_tolerance_mm(&self) -> u16 {
+        self.goal_tolerance_mm
+    }
+    /// Extra clearance kept beyond the robot radius by the safety rule, mm.
+    pub fn clearance_mm(&self) -> u16 {
+        self.clearance_mm
+    }
+    /// The escape (virtual obstacle) parameters.
+    pub fn escape(&self) -> &crate::escape::EscapeConfig {
+        &self.escape
+    }
+}
+
+/// Builds a [`Config`]; `build` validates.
+#[derive(Clone, Debug)]
+pub struct ConfigBuilder {
+    adc: AdcProfile,
+    robot_radius_mm: u16,
+    sensor_offset_mm: Option<u16>,
+    sensor_range_mm: u16,
+    sensor_angles_deg: [i16; SENSOR_COUNT],
+    xi_att: i32,
+    xi_mp: i32,
+    xi_sen: i32,
+    goal_tolerance_mm: u16,
+    clearance_mm: u16,
+    min_step_mm: u16,
+    diagonal_tolerance_deg: i16,
+    direct_tolerance_deg: i16,
+    escape: crate::escape::EscapeConfig,
+    calibration: Option<[Calibration; SENSOR_COUNT]>,
+}
+
+impl ConfigBuilder {
+    /// The defaults, with the GP2Y0A21YK0F datasheet calibration for `adc`:
+    ///
+    /// | parameter | default | source |
+    /// |---|---|---|
+    /// | robot radius | 100 mm | ours (scenario format default) |
+    /// | sensor offset | = robot radius (sensors on the rim) | ours |
+    /// | sensor range | 800 mm | paper §4 |
+    /// | sensor angles | −40, −20, 0, 20, 40° | paper §4 |
+    /// | ξ_att | 2 | paper eq. 5 |
+    /// | ξ_MP | 1 | paper eq. 12 |
+    /// | ξ (off-sensor) | 1 | paper eq. 14 |
+    /// | goal tolerance | 50 mm | ours |
+    /// | clearance | 20 mm | ours (safety rule, §5) |
+    /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
+    /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
+    /// | DM tolerance | 5° from the target bearing | ours |
+    pub fn new(adc: AdcProfile) -> Self {
+        ConfigBuilder {
+            adc,
+            robot_radius_mm: 100,
+            sensor_offset_mm: None,
+            sensor_range_mm: 800,
+            sensor_angles_deg: [-40, -20, 0, 20, 40],
+            xi_att: 2 * FORCE_ONE,
+            xi_mp: FORCE_ONE,
+            xi_sen: FORCE_ONE,
+            goal_tolerance_mm: 50,
+            clearance_mm: 20,
+            min_step_mm: 10,
+            diagonal_tolerance_deg: 5,
+            direct_tolerance_deg: 5,
+            escape: crate::escape::EscapeConfig::default(),
+            calibration: None,
+        }
+    }
+
+    /// Robot radius in mm.
+    pub fn robot_radius_mm(mut self, v: u16) -> Self {
+        self.robot_radius_mm = v;
+        self
+    }
+    /// Centre-to-sensor-face distance in mm (default: the robot radius).
+    pub fn sensor_offset_mm(mut self, v: u16) -> Self {
+        self.sensor_offset_mm = Some(v);
+        self
+    }
+    /// Sensor range in mm.
+    pub fn sensor_range_mm(mut self, v: u16) -> Self {
+        self.sensor_range_mm = v;
+        self
+    }
+    /// Sensor angles in whole degrees, robot frame, in sensor order.
+    pub fn sensor_angles_deg(mut self, v: [i16; SENSOR_COUNT]) -> Self {
+        self.sensor_angles_deg = v;
+        self
+    }
+    /// ξ_att, ξ_MP and ξ in 1/1024 force units (paper: 2048, 1024, 1024).
+    pub fn gains_q10(mut self, xi_att: i32, xi_mp: i32, xi_sen: i32) -> Self {
+        self.xi_att = xi_att;
+        self.xi_mp = xi_mp;
+        self.xi_sen = xi_sen;
+        self
+    }
+    /// Distance at which the goal counts as reached, mm.
+    pub fn goal_tolerance_mm(mut self, v: u16) -> Self {
+        self.goal_tolerance_mm = v;
+        self
+    }
+    /// Clearance kept beyond the robot radius by the safety rule, mm.
+    pub fn clearance_mm(mut self, v: u16) -> Self {
+        self.clearance_mm = v;
+        self
+    }
+    /// Angle tolerances in degrees: XY classification (eq. 13) and DM motion.
+    pub fn tolerances_deg(mut self, diagonal: i16, direct: i16) -> Self {
+        self.diagonal_tolerance_deg = diagonal;
+        self.direct_tolerance_deg = direct;
+        self
+    }
+    /// Escape (virtual obstacle) parameters.
+    pub fn escape(mut self, v: crate::escape::EscapeConfig) -> Self {
+        self.escape = v;
+        self
+    }
+    /// Per-sensor calibration tables (default: the datasheet curve for all).
+    pub fn calibration(mut self, v: [Calibration; SENSOR_COUNT]) -> Self {
+        self.calibration = Some(v);
+        self
+    }
+
+    /// Validate and build.
+    pub fn build(self) -> Result<Config, ConfigError> {
+        if !(20..=1_000).contains(&self.robot_radius_mm) {
+            return Err(ConfigError::RobotRadius);
+        }
+        if !(100..=1_500).contains(&self.sensor_range_mm) {
+            return Err(ConfigError::SensorRange);
+        }
+        let offset = self.sensor_offset_mm.unwrap_or(self.robot_radius_mm);
+        if offset > 1_000 {
+            return Err(ConfigError::SensorOffset);
+        }
+        let a = self.sensor_angles_deg;
+        let increasing = a.windows(2).all(|w| w[0] < w[1]);
+        if !increasing || a[1] >= 0 || a[2] != 0 || a[3] <= 0 || a[0] < -90 || a[4] > 90 {
+            return Err(ConfigError::SensorAngles);
+        }
+        let gain_ok = |g: i32| (0..=16 * FORCE_ONE).contains(&g);
+        if self.xi_att <= 0
+            || !gain_ok(self.xi_att)
+            || !gain_ok(self.xi_mp)
+            || !gain_ok(self.xi_sen)
+        {
+            return Err(ConfigError::Gain);
+        }
+        if !(10..=1_000).contains(&self.goal_tolerance_mm) {
+            return Err(ConfigError::GoalTolerance);
+        }
+        let tol_ok = |d: i16| (0..=30).contains(&d);
+        if !tol_ok(self.diagonal_tolerance_deg) || !tol_ok(self.direct_tolerance_deg) {
+            return Err(ConfigError::AngleTolerance);
+        }
+        if self.clearance_mm > 500 {
+            return Err(ConfigError::Clearance);
+        }
+        if !self.escape.is_valid() {
+            return Err(ConfigError::Escape);
+        }
+        let calibration = match self.calibration {
+            Some(c) => c,
+            None => {
+                let c =
+                    Calibration::gp2y0a21(self.adc).map_err(|e| ConfigError::Calibration(0, e))?;
+                [c.clone(), c.clone(), c.clone(), c.clone(), c]
+            }
+        };
+        let angles = a.map(Angle::from_deg);
+        let sensor_dirs = angles.map(|t| (t.cos(), t.sin()));
+        debug_assert!(sensor_dirs.iter().all(|d| d.0.abs() <= TRIG_ONE));
+        Ok(Config {
+            robot_radius_mm: self.robot_radius_mm,
+            sensor_offset_mm: offset,
+            sensor_range_mm: self.sensor_range_mm,
+            sensor_angles: angles,
+            sensor_dirs,
+            xi_att: self.xi_att,
+            xi_mp: self.xi_mp,
+            xi_sen: self.xi_sen,
+            goal_tolerance_mm: self.goal_tolerance_mm,
+            clearance_mm: self.clearance_mm,
+            min_step_mm: self.min_step_mm,
+            diagonal_tolerance: Angle::from_deg(self.diagonal_tolerance_deg),
+            direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),
+            escape: self.escape,
+            calibration,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn b() -> ConfigBuilder {
+        ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+    }
+
+    #[test]
+    fn defaults_are_the_papers() {
+        let c = b().build().unwrap();
+        assert_eq!(c.robot_radius_mm(), 100);
+        assert_eq!(c.sensor_range_mm(), 800);
+        assert_eq!(c.sensor_angles()[0], Angle::from_deg(-40));
+        assert_eq!(c.sensor_angles()[4], Angle::from_deg(40));
+        assert_eq!(c.xi_att, 2 * FORCE_ONE);
+        assert_eq!(c.xi_mp, FORCE_ONE);
+        assert_eq!(c.xi_sen, FORCE_ONE);
+        assert_eq!(c.sector_half_width(), Angle::from_deg(40));
+        assert!(ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3)
+            .build()
+            .is_ok());
+    }
+
+    #[test]
+    fn bad_configs_are_errors() {
+        assert_eq!(
+            b().robot_radius_mm(0).build(),
+            Err(ConfigError::RobotRadius)
+        );
+        assert_eq!(
+            b().sensor_range_mm(50).build(),
+            Err(ConfigError::SensorRange)
+        );
+        assert_eq!(
+            b().sensor_offset_mm(5_000).build(),
+            Err(ConfigError::SensorOffset)
+        );
+        assert_eq!(
+            b().sensor_angles_deg([-40, 20, 0, 20, 40]).build(),
+            Err(ConfigError::SensorAngles)
+        );
+        assert_eq!(
+            b().sensor_angles_deg([-100, -20, 0, 20, 40]).build(),
+            Err(ConfigError::SensorAngles)
+        );
+        assert_eq!(b().gains_q10(0, 1024, 1024).build(), Err(ConfigError::Gain));
+        assert_eq!(
+            b().gains_q10(2048, -1, 1024).build(),
+            Err(ConfigError::Gain)
+        );
+        assert_eq!(
+            b().goal_tolerance_mm(0).build(),
+            Err(ConfigError::GoalTolerance)
+        );
+        assert_eq!(
+            b().tolerances_deg(45, 5).build(),
+            Err(ConfigError::AngleTolerance)
+        );
+        assert_eq!(b().clearance_mm(900).build(), Err(ConfigError::Clearance));
+        let bad_adc = AdcProfile {
+            bits: 3,
+            vref_mv: 0,
+        };
+        assert_eq!(
+            ConfigBuilder::new(bad_adc).build(),
+            Err(ConfigError::Calibration(0, CalibrationError::BadAdc))
+        );
+    }
+}

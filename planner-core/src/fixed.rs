@@ -1,0 +1,406 @@
+//! The one place that defines the fixed-point formats, and the few
+//! arithmetic routines (trigonometry, square root) built on them.
+//!
+//! The formats are chosen for the ATmega328P: 16-bit storage, 32-bit
+//! intermediates, no floating point, and as few 32-bit divisions per planner
+//! step as possible (one costs about 1,600 cycles there). There are no lookup
+//! tables: sine is a polynomial, so nothing has to be copied into the AVR's
+//! 2 KB of RAM.
+//!
+//! | quantity | type | unit / scale | range | resolution | overflow |
+//! |---|---|---|---|---|---|
+//! | world coordinate | [`Point`] fields, `i16` | millimetre | ±32.767 m | 1 mm | saturates on conversion |
+//! | distance, step | `u16` (`_mm` names) | millimetre | 0…65.535 m | 1 mm | saturates |
+//! | angle, heading | [`Angle`] (`u16`) | binary angle, 65,536 = one turn | any (wraps) | 0.0055° | wraps (angles are circular) |
+//! | sine, cosine | `i32` | Q14: 16,384 = 1.0 | ±1.0 | 6.1e-5 | n/a |
+//! | force | [`Force`] (`i32` x, y) | Q10: 1,024 = 1 force unit | ±2,097,151 units | 0.001 | saturating adds |
+//!
+//! A "force unit" is the paper's: the attractive force has magnitude
+//! ξ_att = 2, a collision point 1 m away repels with 1, one 0.1 m away with 100.
+
+/// Fraction bits of a [`Force`] component.
+pub const FORCE_SHIFT: u32 = 10;
+/// One force unit in [`Force`] components (Q10).
+pub const FORCE_ONE: i32 = 1 << FORCE_SHIFT;
+/// Fraction bits of the trigonometric results.
+pub const TRIG_SHIFT: u32 = 14;
+/// 1.0 in the Q14 format of [`Angle::sin`] and [`Angle::cos`].
+pub const TRIG_ONE: i32 = 1 << TRIG_SHIFT;
+
+/// An angle as a binary fraction of a full turn: 65,536 = 360°.
+///
+/// Wrapping `u16` arithmetic is exactly circular arithmetic, so headings never
+/// need normalising and cannot leave their range. Counter-clockwise positive,
+/// zero along +x (ALGORITHMS.md conventions).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Angle(pub u16);
+
+impl Angle {
+    /// 0°.
+    pub const ZERO: Angle = Angle(0);
+    /// 90°.
+    pub const QUARTER: Angle = Angle(16_384);
+    /// 180°.
+    pub const HALF: Angle = Angle(32_768);
+
+    /// Whole degrees to an angle (exact to the angle's resolution).
+    pub const fn from_deg(deg: i16) -> Angle {
+        // deg * 65536 / 360, rounded; computed in i32 so it is exact for any i16.
+        let turns = (deg as i32 % 360 + 360) % 360;
+        Angle(((turns * 65_536 + 180) / 360) as u16)
+    }
+
+    /// Tenths of a degree to an angle.
+    pub const fn from_decideg(decideg: i16) -> Angle {
+        let t = (decideg as i32 % 3600 + 3600) % 3600;
+        Angle(((t * 65_536 + 1_800) / 3_600) as u16)
+    }
+
+    /// The angle as a signed value in (−32,768 … 32,767] ≙ [−180°, 180°).
+    pub const fn signed(self) -> i16 {
+        self.0 as i16
+    }
+
+    /// `self + other`, wrapping.
+    pub const fn add(self, other: Angle) -> Angle {
+        Angle(self.0.wrapping_add(other.0))
+    }
+
+    /// `self − other`, wrapping.
+    pub const fn sub(self, other: Angle) -> Angle {
+        Angle(self.0.wrapping_sub(other.0))
+    }
+
+    /// `−self`.
+    pub const fn neg(self) -> Angle {
+        Angle(self.0.wrapping_neg())
+    }
+
+    /// The magnitude of the signed angle, 0 … 32,768.
+    pub const fn abs_signed(self) -> u16 {
+        self.signed().unsigned_abs()
+    }
+
+    /// Sine in Q14.
+    ///
+    /// Fifth-order polynomial `x·(a − x²·(b − x²·c))` with `a = π/2`,
+    /// `b = π − 5/2`, `c = π/2 − 3/2`, exact at 0 and ±90°, maximum error
+    /// about 5·10⁻⁴ (0.03° of heading); four 32-bit multiplies and no table.
+    pub fn sin(self) -> i32 {
+        // Fold into [−90°, 90°]: sin(180° − t) = sin(t).
+        let mut s = self.signed() as i32;
+        if s > 16_384 {
+            s = 32_768 - s;
+        } else if s < -16_384 {
+            s = -32_768 - s;
+        }
+        // s is now x in Q14, x ∈ [−1, 1] standing for x·90°.
+        const A: i32 = 25_736; // π/2 in Q14
+        const B: i32 = 10_512; // (π − 5/2) in Q14
+        const C: i32 = 1_160; // (π/2 − 3/2) in Q14
+        let x2 = (s * s) >> 14;
+        let t = B - ((C * x2) >> 14);
+        let t = A - ((t * x2) >> 14);
+        (s * t + (1 << 13)) >> 14
+    }
+
+    /// Cosine in Q14.
+    pub fn cos(self) -> i32 {
+        self.add(Angle::QUARTER).sin()
+    }
+
+    /// `(cos, sin)` scaled so the vector has length `magnitude` (any scale;
+    /// clamped to ±131,071 so the Q14 products fit in 32 bits).
+    pub fn scaled(self, magnitude: i32) -> (i32, i32) {
+        let magnitude = magnitude.clamp(-MAX_SCALED, MAX_SCALED);
+        (
+            mul_q14(self.cos(), magnitude),
+            mul_q14(self.sin(), magnitude),
+        )
+    }
+
+    /// `atan2(y, x)` as an angle; `atan2(0, 0)` is 0.
+    ///
+    /// Octant reduction, one 32-bit division for the ratio `t = min/max`,
+    /// then `atan(t) ≈ (π/4)t + t(1 − t)(0.2447 + 0.0663t)`, maximum error
+    /// 0.0015 rad (0.09°).
+    pub fn atan2(y: i32, x: i32) -> Angle {
+        if x == 0 && y == 0 {
+            return Angle::ZERO;
+        }
+        let mut ax = x.unsigned_abs();
+        let mut ay = y.unsigned_abs();
+        // Keep both below 2^16 so `lo << 15` fits in u32.
+        while ax >= 1 << 16 || ay >= 1 << 16 {
+            ax >>= 1;
+            ay >>= 1;
+        }
+        let (lo, hi) = if ay > ax { (ax, ay) } else { (ay, ax) };
+        // t in Q15, 0 ..= 32768.
+        let t = ((lo << 15) / hi) as i32;
+        // Binary-angle constants: 0.2447 rad and 0.0663 rad in units of 2π/65536.
+        let p = 2_552 + ((692 * t) >> 15);
+        let q = (t * (32_768 - t)) >> 15;
+        let mut a = (t >> 2) + ((q * p) >> 15); // 0 ..= 8192 (45°)
+        if ay > ax {
+            a = 16_384 - a;
+        }
+        if x < 0 {
+            a = 32_768 - a;
+        }
+        if y < 0 {
+            a = -a;
+        }
+        Angle(a as u16)
+    }
+
+    /// Angle in degrees as f64, for tests, reports and telemetry only.
+    #[cfg(test)]
+    pub fn to_deg_f64(self) -> f64 {
+        self.signed() as f64 * 360.0 / 65_536.0
+    }
+}
+
+/// Largest magnitude [`Angle::scaled`] accepts (`2^17 − 1`).
+pub const MAX_SCALED: i32 = (1 << 17) - 1;
+
+/// `a · b` where `b` is Q14, rounded; `|a| < 2^17`, `|b| ≤ 2^14`.
+#[inline]
+pub fn mul_q14(a: i32, b: i32) -> i32 {
+    (a * b + (1 << 13)) >> 14
+}
+
+/// A point of the world in millimetres (world frame, x right, y up).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Point {
+    /// x in mm.
+    pub x: i16,
+    /// y in mm.
+    pub y: i16,
+}
+
+impl Point {
+    /// A point from millimetres.
+    pub const fn new(x: i16, y: i16) -> Point {
+        Point { x, y }
+    }
+
+    /// A point from 32-bit millimetres, saturating to the `i16` range.
+    pub fn saturating(x: i32, y: i32) -> Point {
+        Point {
+            x: sat_i16(x),
+            y: sat_i16(y),
+        }
+    }
+
+    /// `other − self` as 32-bit millimetres (never overflows).
+    pub fn to(self, other: Point) -> (i32, i32) {
+        (
+            other.x as i32 - self.x as i32,
+            other.y as i32 - self.y as i32,
+        )
+    }
+
+    /// Distance to `other` in mm, saturating at `u16::MAX`.
+    pub fn distance_mm(self, other: Point) -> u16 {
+        let (dx, dy) = self.to(other);
+        hypot(dx, dy)
+    }
+
+    /// The point `distance_mm` away along `dir`.
+    pub fn offset(self, dir: Angle, distance_mm: u16) -> Point {
+        let (dx, dy) = dir.scaled(distance_mm as i32);
+        Point::saturating(self.x as i32 + dx, self.y as i32 + dy)
+    }
+}
+
+/// Saturating conversion to `i16`.
+pub fn sat_i16(v: i32) -> i16 {
+    v.clamp(i16::MIN as i32, i16::MAX as i32) as i16
+}
+
+/// Saturating conversion to `u16`.
+pub fn sat_u16(v: i32) -> u16 {
+    v.clamp(0, u16::MAX as i32) as u16
+}
+
+/// Integer square root, `floor(√v)`, bit by bit (no division).
+pub fn isqrt(v: u32) -> u16 {
+    let mut rem = v;
+    let mut root: u32 = 0;
+    let mut bit: u32 = 1 << 30;
+    while bit > rem {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root as u16
+}
+
+/// `√(dx² + dy²)` in the inputs' unit, saturating at `u16::MAX`.
+pub fn hypot(dx: i32, dy: i32) -> u16 {
+    let mut ax = dx.unsigned_abs();
+    let mut ay = dy.unsigned_abs();
+    let mut shift = 0;
+    // Each component below 2^15 keeps the sum of squares below 2^31.
+    while ax >= 1 << 15 || ay >= 1 << 15 {
+        ax >>= 1;
+        ay >>= 1;
+        shift += 1;
+    }
+    let r = isqrt(ax * ax + ay * ay) as u32;
+    let r = r << shift;
+    if r > u16::MAX as u32 {
+        u16::MAX
+    } else {
+        r as u16
+    }
+}
+
+/// A force in the world frame, components in Q10 force units.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Force {
+    /// x component, Q10.
+    pub x: i32,
+    /// y component, Q10.
+    pub y: i32,
+}
+
+impl Force {
+    /// No force.
+    pub const ZERO: Force = Force { x: 0, y: 0 };
+
+    /// A force of `magnitude` (Q10) pointing along `dir`.
+    pub fn along(dir: Angle, magnitude: i32) -> Force {
+        let (x, y) = dir.scaled(magnitude);
+        Force { x, y }
+    }
+
+    /// Component-wise saturating sum.
+    pub fn plus(self, other: Force) -> Force {
+        Force {
+            x: self.x.saturating_add(other.x),
+            y: self.y.saturating_add(other.y),
+        }
+    }
+
+    /// The direction of the force (`atan2`, eq. 17); `None` for a zero force.
+    pub fn direction(self) -> Option<Angle> {
+        if self.x == 0 && self.y == 0 {
+            None
+        } else {
+            Some(Angle::atan2(self.y, self.x))
+        }
+    }
+}
+
+/// `1 / d²` in Q10 force units, `d` in mm (`d` = 1 m gives 1.0).
+///
+/// Eq. 10's magnitude `|P_R − P_C| / d³ = 1/d²`. One 32-bit division; `d`
+/// below 91 mm (closer than any IR reading can place an obstacle from the
+/// robot's centre) is treated as 91 mm, ~124 force units, which keeps the
+/// magnitude inside [`MAX_SCALED`].
+pub fn inverse_square_force(d_mm: u16) -> i32 {
+    let d = d_mm.max(91) as u32;
+    // 10^6 mm² · 1024 = 1.024e9 fits in u32.
+    (1_024_000_000u32 / (d * d)) as i32
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn from_deg_is_exact_on_quarters() {
+        assert_eq!(Angle::from_deg(90), Angle(16_384));
+        assert_eq!(Angle::from_deg(-90), Angle(49_152));
+        assert_eq!(Angle::from_deg(180), Angle(32_768));
+        assert_eq!(Angle::from_deg(360), Angle(0));
+        assert_eq!(Angle::from_deg(45).signed(), 8_192);
+        assert_eq!(Angle::from_decideg(-400), Angle::from_deg(-40));
+    }
+
+    #[test]
+    fn sine_matches_f64_everywhere() {
+        let mut worst = 0.0f64;
+        for a in (0..=u16::MAX).step_by(7) {
+            let ang = a as f64 * core::f64::consts::TAU / 65_536.0;
+            let s = Angle(a).sin() as f64 / TRIG_ONE as f64;
+            let c = Angle(a).cos() as f64 / TRIG_ONE as f64;
+            worst = worst.max((s - ang.sin()).abs()).max((c - ang.cos()).abs());
+        }
+        assert!(worst < 6.0e-4, "sine error {worst}");
+        assert_eq!(Angle::ZERO.sin(), 0);
+        assert_eq!(Angle::QUARTER.sin(), TRIG_ONE);
+        assert_eq!(Angle::HALF.cos(), -TRIG_ONE);
+    }
+
+    #[test]
+    fn atan2_matches_f64_within_a_tenth_of_a_degree() {
+        let mut worst = 0.0f64;
+        for i in -60i32..=60 {
+            for j in -60i32..=60 {
+                for scale in [1, 37, 1_000, 100_000] {
+                    let (x, y) = (i * scale, j * scale);
+                    if x == 0 && y == 0 {
+                        continue;
+                    }
+                    let got = Angle::atan2(y, x).to_deg_f64();
+                    let want = (y as f64).atan2(x as f64).to_degrees();
+                    let mut e = (got - want).abs();
+                    if e > 180.0 {
+                        e = 360.0 - e;
+                    }
+                    worst = worst.max(e);
+                }
+            }
+        }
+        assert!(worst < 0.1, "atan2 error {worst}°");
+        assert_eq!(Angle::atan2(0, 0), Angle::ZERO);
+        assert_eq!(Angle::atan2(5, 0), Angle::QUARTER);
+        assert_eq!(Angle::atan2(0, -5), Angle::HALF);
+        assert_eq!(Angle::atan2(i32::MIN, i32::MIN).signed(), -24_576);
+    }
+
+    #[test]
+    fn isqrt_and_hypot() {
+        for v in [0u32, 1, 2, 3, 4, 15, 16, 17, 99_999, 1 << 30, u32::MAX] {
+            let r = isqrt(v) as u64;
+            assert!(r * r <= v as u64 && (r + 1) * (r + 1) > v as u64, "{v}");
+        }
+        assert_eq!(hypot(3_000, -4_000), 5_000);
+        assert_eq!(hypot(-32_768, 0), 32_768);
+        assert_eq!(hypot(i32::MAX, i32::MAX), u16::MAX);
+        assert_eq!(Point::new(0, 0).distance_mm(Point::new(300, 400)), 500);
+    }
+
+    #[test]
+    fn inverse_square_force_by_hand() {
+        // 1 m → 1.0, 0.5 m → 4.0, 0.1 m → 100.0 force units.
+        assert_eq!(inverse_square_force(1_000), 1_024);
+        assert_eq!(inverse_square_force(500), 4_096);
+        assert_eq!(inverse_square_force(100), 102_400);
+        assert_eq!(inverse_square_force(0), inverse_square_force(91));
+        assert!(inverse_square_force(0) <= MAX_SCALED);
+    }
+
+    #[test]
+    fn point_offset_and_saturation() {
+        let p = Point::new(1_000, 1_000).offset(Angle::from_deg(90), 500);
+        assert_eq!(p, Point::new(1_000, 1_500));
+        assert_eq!(
+            Point::saturating(40_000, -40_000),
+            Point::new(32_767, -32_768)
+        );
+    }
+}

@@ -1,0 +1,371 @@
+//! # planner-core
+//!
+//! The navigation brain of a two-wheel rover that sees through five infrared
+//! range sensors: the Enhanced Artificial Potential Field planner (EAPF,
+//! Mohamed & Abbas 2013) with virtual-obstacle escape from local minima
+//! (Moaveni & Ghanbari Gol), in fixed point, without allocation or `unsafe`.
+//! The same code runs in the host simulator, on an ATmega328P and on an
+//! STM32F4, and gives the same commands bit for bit from the same inputs.
+//!
+//! Each cycle the caller passes the pose (from odometry) and the five raw
+//! ADC counts; the planner returns a [`Command`] (world heading, step length)
+//! and a [`Status`]. The executor turns in place, then advances, calling
+//! [`Planner::guard_raw`] with fresh counts during the advance.
+//!
+//! ```
+//! use planner_core::{AdcProfile, ConfigBuilder, Planner, Point, Pose, Angle, Status};
+//! let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().unwrap();
+//! let mut planner = Planner::new(cfg, Point::new(3_000, 0));
+//! let pose = Pose { position: Point::new(0, 0), heading: Angle::ZERO };
+//! let out = planner.step_raw(pose, &[0; 5]); // nothing in sight
+//! assert_eq!(out.status, Status::Moving);
+//! assert_eq!(out.command.heading, Angle::ZERO);
+//! assert_eq!(out.command.step_mm, 780); // sensor reach minus the robot's disc
+//! ```
+//!
+//! Modules, one per concept of the papers: [`fixed`] (the fixed-point
+//! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
+//! points), [`escape`] (virtual obstacles), [`command`] (output and the
+//! safety rule), [`config`].
+//!
+//! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
+//! `embedded-hal` 0.2 (feature `hal02`) for the ADC adapter, because 1.0 has
+//! no ADC trait; `defmt` (feature `defmt`) for logging the types on target.
+#![cfg_attr(not(test), no_std)]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+
+pub mod command;
+pub mod config;
+pub mod escape;
+pub mod fixed;
+pub mod forces;
+pub mod memory;
+pub mod sensors;
+
+pub use command::{Command, Guard, Output, Status};
+pub use config::{Config, ConfigBuilder, ConfigError};
+pub use escape::{EscapeConfig, Verdict};
+pub use fixed::{Angle, Force, Point};
+pub use sensors::{
+    AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
+};
+
+use forces::Motion;
+
+/// The rover's pose from odometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Pose {
+    /// Position, world mm.
+    pub position: Point,
+    /// Heading, world frame.
+    pub heading: Angle,
+}
+
+/// The EAPF planner with its state: remembered collision points, the
+/// off-sensor following state, the paper's step size, virtual obstacles.
+#[derive(Clone, Debug)]
+pub struct Planner {
+    config: Config,
+    goal: Point,
+    memory: memory::Memory,
+    escape: escape::Escape,
+    fold_back: sensors::FoldBackFilter,
+    following: bool,
+    paper_step_mm: u16,
+    unreachable: bool,
+    last_points: heapless::Vec<Point, SENSOR_COUNT>,
+    last_readings: Readings,
+}
+
+impl Planner {
+    /// A planner heading for `goal`.
+    pub fn new(config: Config, goal: Point) -> Self {
+        let range = config.sensor_range_mm;
+        Planner {
+            config,
+            goal,
+            memory: memory::Memory::new(),
+            escape: escape::Escape::new(),
+            fold_back: sensors::FoldBackFilter::default(),
+            following: false,
+            paper_step_mm: range,
+            unreachable: false,
+            last_points: heapless::Vec::new(),
+            last_readings: [Reading::Clear; SENSOR_COUNT],
+        }
+    }
+
+    /// A new goal: forgets the memory, virtual obstacles and status.
+    pub fn set_goal(&mut self, goal: Point) {
+        *self = Planner::new(self.config.clone(), goal);
+    }
+
+    /// The goal.
+    pub fn goal(&self) -> Point {
+        self.goal
+    }
+
+    /// The configuration.
+    pub fn config(&self) -> &Config {
+        &self.config
+    }
+
+    /// Convert raw counts to readings with the per-sensor calibrations.
+    pub fn readings(&self, raw: &RawCounts) -> Readings {
+        let mut out = [Reading::Clear; SENSOR_COUNT];
+        for ((o, &c), cal) in out
+            .iter_mut()
+            .zip(raw.iter())
+            .zip(self.config.calibration.iter())
+        {
+            *o = cal.reading(c);
+        }
+        out
+    }
+
+    /// One planner cycle reading the sensors from `sensors`.
+    pub fn step<S: IrSensors>(&mut self, pose: Pose, sensors: &mut S) -> Result<Output, S::Error> {
+        let raw = sensors.read_raw()?;
+        Ok(self.step_raw(pose, &raw))
+    }
+
+    /// One planner cycle from raw ADC counts (the entry point every front
+    /// end shares).
+    pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        let mut readings = self.readings(raw);
+        self.fold_back.apply(&mut readings);
+        self.last_readings = readings;
+        self.last_points.clear();
+        let stop = |status| Output {
+            command: Command {
+                heading: pose.heading,
+                step_mm: 0,
+            },
+            status,
+        };
+        if readings.contains(&Reading::Implausible) {
+            return stop(Status::SensorFault);
+        }
+        let robot = pose.position;
+        let goal_mm = robot.distance_mm(self.goal);
+        if goal_mm <= self.config.goal_tolerance_mm {
+            return stop(Status::Arrived);
+        }
+        if self.unreachable {
+            return stop(Status::Unreachable);
+        }
+        let (gx, gy) = robot.to(self.goal);
+        let bearing = Angle::atan2(gy, gx);
+        if self
+            .escape
+            .observe(&self.config.escape, robot, goal_mm, bearing)
+            == Verdict::GiveUp
+        {
+            self.unreachable = true;
+            return stop(Status::Unreachable);
+        }
+        let cfg = &self.config;
+        let near = goal_mm < cfg.sensor_range_mm;
+
+        // Collision points (eqs. 7, 8) and the memory of them (eqs. 11-13).
+        let points = forces::collision_points(cfg, &readings, self.paper_step_mm);
+        for p in points.iter() {
+            let w = forces::world_point(cfg, robot, pose.heading, p.sensor as usize, p.distance_mm);
+            let _ = self.last_points.push(w);
+            self.memory
+                .remember(w, robot, pose.heading, self.goal, cfg.diagonal_tolerance);
+        }
+
+        // Off-sensor following state (§5.5): from the first collision until DM.
+        let motion = forces::motion(cfg, pose.heading, bearing);
+        if motion == Motion::Direct {
+            self.following = false;
+        } else if !points.is_empty() {
+            self.following = true;
+        }
+
+        // Eq. 16: the sum of the forces; the near-target rule drops the
+        // midpoint and off-sensor forces.
+        let mut f = forces::attractive(cfg, bearing)
+            .plus(forces::repulsive(cfg, pose.heading, &points))
+            .plus(self.escape.force(&cfg.escape, robot, cfg.robot_radius_mm));
+        if !near {
+            let (_, ax, ay) = self.memory.away_from_midpoint(robot, self.goal);
+            f = f.plus(forces::midpoint(cfg, ax, ay));
+            if self.following {
+                f = f.plus(forces::off_sensor(cfg, pose.heading, motion, &readings));
+            }
+        }
+        // Eq. 17.
+        let heading = f.direction().unwrap_or(bearing);
+
+        // The paper's step: the sensor range when free, else the farthest
+        // detection plus the robot's width.
+        let farthest = points
+            .iter()
+            .map(|p| p.distance_mm - cfg.sensor_offset_mm.min(p.distance_mm))
+            .max();
+        self.paper_step_mm = match farthest {
+            None => cfg.sensor_range_mm,
+            Some(d) => d.saturating_add(2 * cfg.robot_radius_mm),
+        };
+
+        // Safety (§5): never outside the sensed sector, never beyond what the
+        // readings show free.
+        let relative = heading.sub(pose.heading);
+        let mut step = if relative.abs_signed() > cfg.sector_half_width().0 {
+            0
+        } else {
+            self.paper_step_mm
+                .min(command::free_distance_mm(cfg, &readings, relative))
+        };
+        if near {
+            step = step.min(goal_mm);
+        }
+        if step < cfg.min_step_mm {
+            step = 0;
+        }
+        Output {
+            command: Command {
+                heading,
+                step_mm: step,
+            },
+            status: Status::Moving,
+        }
+    }
+
+    /// The guard the executor calls during an advance with fresh raw counts
+    /// and the part of the step still to go.
+    pub fn guard_raw(&self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        command::guard(&self.config, &self.readings(raw), remaining_mm)
+    }
+
+    /// The remembered collision points.
+    pub fn memory(&self) -> &memory::Memory {
+        &self.memory
+    }
+
+    /// The escape state (virtual obstacles).
+    pub fn escape(&self) -> &escape::Escape {
+        &self.escape
+    }
+
+    /// The collision points of the last cycle, world mm.
+    pub fn last_collision_points(&self) -> &[Point] {
+        &self.last_points
+    }
+
+    /// The readings of the last cycle, after filtering.
+    pub fn last_readings(&self) -> &Readings {
+        &self.last_readings
+    }
+
+    /// The paper's step size the next cycle will test collisions against.
+    pub fn paper_step_mm(&self) -> u16 {
+        self.paper_step_mm
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn planner(goal: Point) -> Planner {
+        Planner::new(
+            ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+                .build()
+                .unwrap(),
+            goal,
+        )
+    }
+
+    fn at(x: i16, y: i16, deg: i16) -> Pose {
+        Pose {
+            position: Point::new(x, y),
+            heading: Angle::from_deg(deg),
+        }
+    }
+
+    #[test]
+    fn free_motion_heads_for_the_goal() {
+        let mut p = planner(Point::new(0, 3_000));
+        let out = p.step_raw(at(0, 0, 90), &[0; 5]);
+        assert_eq!(out.command.heading, Angle::QUARTER);
+        assert_eq!(out.command.step_mm, 780);
+        assert_eq!(out.status, Status::Moving);
+    }
+
+    #[test]
+    fn heading_outside_the_sector_turns_first() {
+        let mut p = planner(Point::new(-3_000, 0));
+        let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+        assert_eq!(out.command.heading, Angle::HALF);
+        assert_eq!(out.command.step_mm, 0);
+    }
+
+    #[test]
+    fn arrival_and_near_target_step() {
+        let mut p = planner(Point::new(500, 0));
+        let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+        assert_eq!(out.command.step_mm, 500);
+        let out = p.step_raw(at(470, 0, 0), &[0; 5]);
+        assert_eq!(out.status, Status::Arrived);
+        assert_eq!(out.command.step_mm, 0);
+    }
+
+    #[test]
+    fn obstacle_ahead_deflects_and_shortens_the_step() {
+        let mut p = planner(Point::new(3_000, 0));
+        let cal = p.config().calibration(2).unwrap().clone();
+        // An obstacle 300 mm ahead on the front sensor (count for ~300 mm).
+        let c300 = (86..=532)
+            .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= 300)
+            .unwrap();
+        let out = p.step_raw(at(0, 0, 0), &[0, 0, c300, 0, 0]);
+        // Attraction 2 forward, repulsion 1/0.4² = 6.25 back: heading reverses.
+        assert_eq!(out.command.heading, Angle::HALF);
+        assert_eq!(out.command.step_mm, 0);
+        assert_eq!(p.last_collision_points().len(), 1);
+        assert_eq!(p.memory().len(), 1);
+    }
+
+    #[test]
+    fn implausible_reading_is_a_fault_and_a_stop() {
+        let mut p = planner(Point::new(3_000, 0));
+        let out = p.step_raw(at(0, 0, 0), &[0, 0, 5_000, 0, 0]);
+        assert_eq!(out.status, Status::SensorFault);
+        assert_eq!(out.command.step_mm, 0);
+    }
+
+    #[test]
+    fn sensor_trait_and_guard() {
+        let mut p = planner(Point::new(3_000, 0));
+        let mut s = ScriptedSensors::new(&[[0; 5]]);
+        assert!(p.step(at(0, 0, 0), &mut s).is_ok());
+        assert!(p.step(at(0, 0, 0), &mut s).is_err());
+        assert_eq!(p.guard_raw(&[0; 5], 700), Guard::Continue);
+        assert_eq!(p.guard_raw(&[0, 0, 500, 0, 0], 700), Guard::Stop);
+    }
+
+    #[test]
+    fn walled_in_goal_becomes_unreachable() {
+        // The rover never gets nearer: escape gives up after its budget.
+        let mut p = planner(Point::new(3_000, 0));
+        let mut status = Status::Moving;
+        for _ in 0..2_000 {
+            status = p.step_raw(at(0, 0, 180), &[0; 5]).status;
+            if status == Status::Unreachable {
+                break;
+            }
+        }
+        assert_eq!(status, Status::Unreachable);
+        assert_eq!(
+            p.step_raw(at(10, 0, 0), &[0; 5]).status,
+            Status::Unreachable
+        );
+        p.set_goal(Point::new(0, 3_000));
+        assert_eq!(p.step_raw(at(0, 0, 90), &[0; 5]).status, Status::Moving);
+    }
+}

@@ -1,0 +1,502 @@
+//! The five infrared range sensors: raw ADC counts in, trusted distances out.
+//!
+//! Sharp GP2Y0A21YK0F-class sensors (ALGORITHMS.md §5) give a voltage that
+//! falls roughly as 1/distance between 10 and 80 cm, fold back below 10 cm
+//! (a very near object reads as farther), and give a low phantom voltage
+//! when nothing is in range. The core therefore converts each raw count with
+//! a per-sensor [`Calibration`] and classifies it as a [`Reading`]: a range,
+//! clear (nothing within the calibrated range), too close, or implausible.
+//! Only ranges and "clear" are trusted as free space.
+//!
+//! embedded-hal 1.0 has no ADC trait, so the core owns [`IrSensors`]; the
+//! `hal02` feature adapts any five embedded-hal 0.2 `adc::OneShot` channels
+//! (stm32f4xx-hal's ADC implements it), and [`ScriptedSensors`] replays
+//! recorded counts for tests and emulated builds.
+
+/// Number of IR sensors, in order −40°, −20°, 0°, +20°, +40°.
+pub const SENSOR_COUNT: usize = 5;
+
+/// One raw ADC count per sensor, in sensor order.
+pub type RawCounts = [u16; SENSOR_COUNT];
+
+/// Bins of a calibration table; the table has `CAL_BINS + 1` entries.
+pub const CAL_BINS: usize = 32;
+
+/// GP2Y0A21YK0F datasheet points (typical curve): (millivolts, millimetres),
+/// nearest first.
+pub const GP2Y0A21_MV_MM: [(u16, u16); 8] = [
+    (2_600, 100),
+    (1_390, 200),
+    (980, 300),
+    (750, 400),
+    (610, 500),
+    (550, 600),
+    (480, 700),
+    (420, 800),
+];
+
+/// An ADC's resolution and reference voltage.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct AdcProfile {
+    /// Resolution in bits (8 ..= 16).
+    pub bits: u8,
+    /// Reference (full-scale) voltage in millivolts.
+    pub vref_mv: u16,
+}
+
+impl AdcProfile {
+    /// ATmega328P: 10-bit ADC, AVcc = 5 V reference.
+    pub const AVR_10BIT_5V: AdcProfile = AdcProfile {
+        bits: 10,
+        vref_mv: 5_000,
+    };
+    /// STM32F4: 12-bit ADC, 3.3 V reference.
+    pub const STM32_12BIT_3V3: AdcProfile = AdcProfile {
+        bits: 12,
+        vref_mv: 3_300,
+    };
+
+    /// Largest count the ADC can produce.
+    pub const fn full_scale(self) -> u16 {
+        let bits = if self.bits > 16 { 16 } else { self.bits };
+        ((1u32 << bits) - 1) as u16
+    }
+
+    /// The count the ADC reads for `mv` millivolts (rounded, saturating).
+    pub fn counts_for_mv(self, mv: u16) -> u16 {
+        let fs = self.full_scale() as u32;
+        let vref = self.vref_mv.max(1) as u32;
+        let c = (mv as u32 * fs + vref / 2) / vref;
+        c.min(fs) as u16
+    }
+}
+
+/// Why a calibration table was refused.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum CalibrationError {
+    /// The ADC profile is outside 8 ..= 16 bits or has a zero reference.
+    BadAdc,
+    /// Fewer than two points.
+    TooFewPoints,
+    /// Counts must rise strictly while distances fall strictly.
+    NotMonotonic,
+    /// A count above the ADC's full scale.
+    CountOutOfRange,
+    /// A distance outside 20 ..= 2,000 mm.
+    DistanceOutOfRange,
+}
+
+/// Raw count → distance for one sensor, resampled at build time onto
+/// `CAL_BINS` equal bins of counts so that a lookup is a shift and one
+/// 16-bit multiply (no division on the AVR).
+#[derive(Clone, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Calibration {
+    shift: u8,
+    full_scale: u16,
+    /// Counts above this are nearer than the nearest calibrated distance.
+    near_count: u16,
+    /// Counts below this are farther than the farthest calibrated distance.
+    far_count: u16,
+    /// Distance in mm at count `i << shift` (the end segments extrapolated).
+    mm: [u16; CAL_BINS + 1],
+}
+
+impl Calibration {
+    /// Build from measured `(count, mm)` points, in any order of input but
+    /// strictly monotonic: a higher count is a nearer object.
+    pub fn from_points(adc: AdcProfile, points: &[(u16, u16)]) -> Result<Self, CalibrationError> {
+        if !(8..=16).contains(&adc.bits) || adc.vref_mv == 0 {
+            return Err(CalibrationError::BadAdc);
+        }
+        if points.len() < 2 {
+            return Err(CalibrationError::TooFewPoints);
+        }
+        let full_scale = adc.full_scale();
+        for &(c, mm) in points {
+            if c > full_scale {
+                return Err(CalibrationError::CountOutOfRange);
+            }
+            if !(20..=2_000).contains(&mm) {
+                return Err(CalibrationError::DistanceOutOfRange);
+            }
+        }
+        // Points sorted by count: ascending counts must have descending mm.
+        let mut sorted: heapless::Vec<(u16, u16), 32> = heapless::Vec::new();
+        for &p in points.iter().take(32) {
+            // Insertion sort into the bounded buffer (build time only).
+            let pos = sorted
+                .iter()
+                .position(|q| q.0 > p.0)
+                .unwrap_or(sorted.len());
+            if sorted.insert(pos, p).is_err() {
+                return Err(CalibrationError::TooFewPoints);
+            }
+        }
+        for w in sorted.windows(2) {
+            if w[0].0 >= w[1].0 || w[0].1 <= w[1].1 {
+                return Err(CalibrationError::NotMonotonic);
+            }
+        }
+        let shift = adc.bits - (CAL_BINS.trailing_zeros() as u8);
+        let mut mm = [0u16; CAL_BINS + 1];
+        for (i, slot) in mm.iter_mut().enumerate() {
+            let c = (i as i32) << shift;
+            // The segment containing c, or the end segment to extrapolate.
+            let k = sorted
+                .windows(2)
+                .position(|w| c <= w[1].0 as i32)
+                .unwrap_or(sorted.len() - 2);
+            let (c0, d0) = (sorted[k].0 as i32, sorted[k].1 as i32);
+            let (c1, d1) = (sorted[k + 1].0 as i32, sorted[k + 1].1 as i32);
+            let num = (c - c0) * (d1 - d0);
+            let den = c1 - c0;
+            let d = d0 + (2 * num + den.signum() * den) / (2 * den);
+            *slot = d.clamp(0, 4_000) as u16;
+        }
+        Ok(Calibration {
+            shift,
+            full_scale,
+            near_count: sorted[sorted.len() - 1].0,
+            far_count: sorted[0].0,
+            mm,
+        })
+    }
+
+    /// The GP2Y0A21YK0F datasheet curve for an ADC (ALGORITHMS.md §5).
+    pub fn gp2y0a21(adc: AdcProfile) -> Result<Self, CalibrationError> {
+        let mut pts = [(0u16, 0u16); GP2Y0A21_MV_MM.len()];
+        for (p, &(mv, mm)) in pts.iter_mut().zip(GP2Y0A21_MV_MM.iter()) {
+            *p = (adc.counts_for_mv(mv), mm);
+        }
+        Calibration::from_points(adc, &pts)
+    }
+
+    /// Classify one raw count.
+    pub fn reading(&self, raw: u16) -> Reading {
+        if raw > self.full_scale {
+            Reading::Implausible
+        } else if raw > self.near_count {
+            Reading::TooClose
+        } else if raw < self.far_count {
+            Reading::Clear
+        } else {
+            let i = (raw >> self.shift) as usize;
+            let f = (raw & ((1 << self.shift) - 1)) as i32;
+            let d0 = self.mm[i] as i32;
+            let d1 = self.mm[(i + 1).min(CAL_BINS)] as i32;
+            let half = 1i32 << (self.shift - 1);
+            let d = d0 + (((d1 - d0) * f + half) >> self.shift);
+            Reading::Range(d.clamp(0, u16::MAX as i32) as u16)
+        }
+    }
+
+    /// Nearest distance the table trusts, mm.
+    pub fn min_mm(&self) -> u16 {
+        self.reading(self.near_count).range_mm().unwrap_or(0)
+    }
+
+    /// The resampled table, `(count, mm)` per bin edge: for reports and for
+    /// the float reference in the tests.
+    pub fn bins(&self) -> impl Iterator<Item = (u16, u16)> + '_ {
+        self.mm
+            .iter()
+            .enumerate()
+            .map(move |(i, &d)| (((i as u32) << self.shift).min(u16::MAX as u32) as u16, d))
+    }
+
+    /// Counts per bin as a shift.
+    pub fn shift(&self) -> u8 {
+        self.shift
+    }
+
+    /// `(far_count, near_count)`: the trusted window of counts.
+    pub fn window(&self) -> (u16, u16) {
+        (self.far_count, self.near_count)
+    }
+}
+
+/// What one sensor says this cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Reading {
+    /// An obstacle this many mm from the sensor face.
+    Range(u16),
+    /// Nothing within the calibrated range: free as far as the sensor sees.
+    Clear,
+    /// Nearer than the calibrated minimum (or in the fold-back region):
+    /// an obstacle at the sensor face, for safety.
+    TooClose,
+    /// A count the sensor cannot produce: not trusted, flagged as a fault.
+    Implausible,
+}
+
+impl Reading {
+    /// The range in mm, if this is a range reading.
+    pub fn range_mm(self) -> Option<u16> {
+        match self {
+            Reading::Range(mm) => Some(mm),
+            _ => None,
+        }
+    }
+}
+
+/// One reading per sensor, in sensor order.
+pub type Readings = [Reading; SENSOR_COUNT];
+
+/// Distrusts a reading that jumps from very near to far in one cycle: that
+/// is what an object entering the fold-back region looks like. The jump is
+/// read as "too close" for that one cycle (the planner turns away rather
+/// than driving on), then trusted again.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FoldBackFilter {
+    last_mm: [u16; SENSOR_COUNT],
+}
+
+impl FoldBackFilter {
+    /// A previous reading at or below this (mm) makes a far jump suspect.
+    pub const NEAR_MM: u16 = 150;
+
+    /// Filter this cycle's readings in place.
+    pub fn apply(&mut self, readings: &mut Readings) {
+        for (r, last) in readings.iter_mut().zip(self.last_mm.iter_mut()) {
+            let now = match *r {
+                Reading::Range(mm) => mm,
+                Reading::Clear => u16::MAX,
+                Reading::TooClose | Reading::Implausible => 0,
+            };
+            let suspect = *last != 0 && *last <= Self::NEAR_MM && now > last.saturating_mul(2);
+            *last = if now == 0 { 1 } else { now };
+            if suspect {
+                *r = Reading::TooClose;
+            }
+        }
+    }
+}
+
+/// A source of the five IR channels as raw ADC counts.
+pub trait IrSensors {
+    /// Why a read failed.
+    type Error;
+    /// Read all five channels, in sensor order (−40° … +40°).
+    fn read_raw(&mut self) -> Result<RawCounts, Self::Error>;
+}
+
+/// A fixed set of counts is a (constant) sensor source.
+impl IrSensors for RawCounts {
+    type Error = core::convert::Infallible;
+    fn read_raw(&mut self) -> Result<RawCounts, Self::Error> {
+        Ok(*self)
+    }
+}
+
+/// The script ran out of recorded frames.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct EndOfScript;
+
+/// Replays recorded raw counts, one frame per read: for host tests, the
+/// simulator and emulated firmware builds that have no real ADC.
+#[derive(Clone, Debug)]
+pub struct ScriptedSensors<'a> {
+    frames: &'a [RawCounts],
+    next: usize,
+}
+
+impl<'a> ScriptedSensors<'a> {
+    /// A source that yields `frames` in order, then [`EndOfScript`].
+    pub fn new(frames: &'a [RawCounts]) -> Self {
+        ScriptedSensors { frames, next: 0 }
+    }
+
+    /// Frames not yet read.
+    pub fn remaining(&self) -> usize {
+        self.frames.len() - self.next
+    }
+}
+
+impl IrSensors for ScriptedSensors<'_> {
+    type Error = EndOfScript;
+    fn read_raw(&mut self) -> Result<RawCounts, EndOfScript> {
+        let f = self.frames.get(self.next).copied().ok_or(EndOfScript)?;
+        self.next += 1;
+        Ok(f)
+    }
+}
+
+#[cfg(feature = "hal02")]
+mod hal02 {
+    use super::{IrSensors, RawCounts};
+    use core::marker::PhantomData;
+    use embedded_hal_02::adc::{Channel, OneShot};
+
+    /// Five embedded-hal 0.2 one-shot ADC channels as an [`IrSensors`]
+    /// source. `pins` are in sensor order (−40° … +40°). Each read blocks
+    /// until its conversion ends (a few µs on an STM32).
+    pub struct OneShotSensors<ADC, A, P0, P1, P2, P3, P4> {
+        /// The ADC peripheral driver.
+        pub adc: A,
+        /// The five analog pins, in sensor order.
+        pub pins: (P0, P1, P2, P3, P4),
+        _adc: PhantomData<ADC>,
+    }
+
+    impl<ADC, A, P0, P1, P2, P3, P4> OneShotSensors<ADC, A, P0, P1, P2, P3, P4> {
+        /// Wrap an ADC driver and five pins.
+        pub fn new(adc: A, pins: (P0, P1, P2, P3, P4)) -> Self {
+            OneShotSensors {
+                adc,
+                pins,
+                _adc: PhantomData,
+            }
+        }
+    }
+
+    impl<ADC, A, E, P0, P1, P2, P3, P4> IrSensors for OneShotSensors<ADC, A, P0, P1, P2, P3, P4>
+    where
+        P0: Channel<ADC>,
+        P1: Channel<ADC>,
+        P2: Channel<ADC>,
+        P3: Channel<ADC>,
+        P4: Channel<ADC>,
+        A: OneShot<ADC, u16, P0, Error = E>
+            + OneShot<ADC, u16, P1, Error = E>
+            + OneShot<ADC, u16, P2, Error = E>
+            + OneShot<ADC, u16, P3, Error = E>
+            + OneShot<ADC, u16, P4, Error = E>,
+    {
+        type Error = E;
+        fn read_raw(&mut self) -> Result<RawCounts, E> {
+            let (p0, p1, p2, p3, p4) = &mut self.pins;
+            Ok([
+                nb::block!(self.adc.read(p0))?,
+                nb::block!(self.adc.read(p1))?,
+                nb::block!(self.adc.read(p2))?,
+                nb::block!(self.adc.read(p3))?,
+                nb::block!(self.adc.read(p4))?,
+            ])
+        }
+    }
+}
+
+#[cfg(feature = "hal02")]
+pub use hal02::OneShotSensors;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn avr() -> Calibration {
+        Calibration::gp2y0a21(AdcProfile::AVR_10BIT_5V).unwrap()
+    }
+
+    #[test]
+    fn datasheet_counts_by_hand() {
+        // 2.6 V of 5 V on 10 bits: 2600 * 1023 / 5000 = 531.96 → 532.
+        assert_eq!(AdcProfile::AVR_10BIT_5V.counts_for_mv(2_600), 532);
+        assert_eq!(AdcProfile::AVR_10BIT_5V.counts_for_mv(420), 86);
+        // 0.42 V of 3.3 V on 12 bits: 420 * 4095 / 3300 = 521.2 → 521.
+        assert_eq!(AdcProfile::STM32_12BIT_3V3.counts_for_mv(420), 521);
+        let cal = avr();
+        assert_eq!(cal.window(), (86, 532));
+    }
+
+    #[test]
+    fn readings_follow_the_datasheet_within_the_resampling_error() {
+        for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
+            let cal = Calibration::gp2y0a21(adc).unwrap();
+            for &(mv, mm) in GP2Y0A21_MV_MM.iter() {
+                let got = cal.reading(adc.counts_for_mv(mv)).range_mm().unwrap();
+                let err = (got as i32 - mm as i32).abs();
+                // Resampling onto 32 bins costs at most this much here.
+                assert!(err <= 25, "{adc:?} {mv} mV: {got} mm vs {mm} mm");
+            }
+        }
+    }
+
+    #[test]
+    fn classification_at_the_edges() {
+        let cal = avr();
+        assert_eq!(cal.reading(0), Reading::Clear);
+        assert_eq!(cal.reading(85), Reading::Clear);
+        assert!(matches!(cal.reading(86), Reading::Range(_)));
+        assert!(matches!(cal.reading(532), Reading::Range(_)));
+        assert_eq!(cal.reading(533), Reading::TooClose);
+        assert_eq!(cal.reading(1_023), Reading::TooClose);
+        assert_eq!(cal.reading(1_024), Reading::Implausible);
+        assert_eq!(cal.reading(u16::MAX), Reading::Implausible);
+    }
+
+    #[test]
+    fn readings_are_monotonic_in_counts() {
+        let cal = avr();
+        let mut prev = u16::MAX;
+        for c in 86..=532 {
+            let d = cal.reading(c).range_mm().unwrap();
+            assert!(d <= prev, "count {c}: {d} > {prev}");
+            prev = d;
+        }
+    }
+
+    #[test]
+    fn bad_tables_are_errors() {
+        let adc = AdcProfile::AVR_10BIT_5V;
+        assert_eq!(
+            Calibration::from_points(adc, &[(100, 500)]),
+            Err(CalibrationError::TooFewPoints)
+        );
+        assert_eq!(
+            Calibration::from_points(adc, &[(100, 500), (200, 600)]),
+            Err(CalibrationError::NotMonotonic)
+        );
+        assert_eq!(
+            Calibration::from_points(adc, &[(100, 500), (100, 400)]),
+            Err(CalibrationError::NotMonotonic)
+        );
+        assert_eq!(
+            Calibration::from_points(adc, &[(100, 500), (2_000, 100)]),
+            Err(CalibrationError::CountOutOfRange)
+        );
+        assert_eq!(
+            Calibration::from_points(adc, &[(100, 5_000), (200, 100)]),
+            Err(CalibrationError::DistanceOutOfRange)
+        );
+        let bad = AdcProfile {
+            bits: 20,
+            vref_mv: 5_000,
+        };
+        assert_eq!(
+            Calibration::from_points(bad, &[(100, 500), (200, 100)]),
+            Err(CalibrationError::BadAdc)
+        );
+        // Order of input does not matter.
+        assert!(Calibration::from_points(adc, &[(200, 300), (100, 500)]).is_ok());
+    }
+
+    #[test]
+    fn fold_back_jump_is_distrusted_for_one_cycle() {
+        let mut f = FoldBackFilter::default();
+        let mut r = [Reading::Range(120); SENSOR_COUNT];
+        f.apply(&mut r);
+        assert_eq!(r[0], Reading::Range(120));
+        let mut r = [Reading::Clear; SENSOR_COUNT];
+        f.apply(&mut r);
+        assert_eq!(r[0], Reading::TooClose);
+        let mut r = [Reading::Clear; SENSOR_COUNT];
+        f.apply(&mut r);
+        assert_eq!(r[0], Reading::Clear);
+    }
+
+    #[test]
+    fn scripted_source_replays_then_ends() {
+        let frames = [[1, 2, 3, 4, 5], [6, 7, 8, 9, 10]];
+        let mut s = ScriptedSensors::new(&frames);
+        assert_eq!(s.read_raw(), Ok([1, 2, 3, 4, 5]));
+        assert_eq!(s.remaining(), 1);
+        assert_eq!(s.read_raw(), Ok([6, 7, 8, 9, 10]));
+        assert_eq!(s.read_raw(), Err(EndOfScript));
+    }
+}
