@@ -59,16 +59,21 @@ pub enum Guard {
 /// a beam: an obstacle a sensor sees, or the far end of what a clear sensor
 /// has seen free. Readings that are not trusted count as an obstacle at the
 /// sensor face. Never more than the front sensor's reach minus the disc.
+///
+/// Stand-off: an obstacle in the corridor is also kept the sensors'
+/// minimum range (`standoff_mm`) beyond the sensor faces, so the rover never
+/// drives an obstacle into the fold-back region where it would read as far.
 pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u16 {
     let rs = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
     let reach = (cfg.sensor_offset_mm + cfg.sensor_range_mm) as i32;
+    let standoff = (cfg.sensor_offset_mm + cfg.standoff_mm) as i32;
     let (c, s) = (relative.cos(), relative.sin());
     let mut free = (reach - rs).max(0);
     for (&r, &(ci, si)) in readings.iter().zip(cfg.sensor_dirs.iter()) {
-        let e = match r {
-            Reading::Range(mm) => cfg.sensor_offset_mm as i32 + mm as i32,
-            Reading::Clear => reach,
-            Reading::TooClose | Reading::Implausible => cfg.sensor_offset_mm as i32,
+        let (e, obstacle) = match r {
+            Reading::Range(mm) => (cfg.sensor_offset_mm as i32 + mm as i32, true),
+            Reading::Clear => (reach, false),
+            Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm as i32, true),
         };
         // The beam end in the robot frame, then in the frame of `relative`.
         let (x, y) = (mul_q14(e, ci), mul_q14(e, si));
@@ -76,7 +81,11 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
         let lateral = mul_q14(y, c) - mul_q14(x, s);
         if lateral.abs() < rs {
             let half_chord = isqrt((rs * rs - lateral * lateral) as u32) as i32;
-            free = free.min((along - half_chord).max(0));
+            let mut limit = along - half_chord;
+            if obstacle {
+                limit = limit.min(along - standoff);
+            }
+            free = free.min(limit.max(0));
         }
     }
     free as u16
@@ -113,18 +122,23 @@ mod tests {
         let clear = [Reading::Clear; SENSOR_COUNT];
         // Nothing seen: front reach 900 − 120 = 780 mm.
         assert_eq!(free_distance_mm(&c, &clear, Angle::ZERO), 780);
-        // Front obstacle 300 mm from the face: 400 − 120 = 280 mm.
+        // Front obstacle 300 mm from the face: the disc could go 400 − 120 =
+        // 280 mm, the stand-off keeps it 100 mm from the face: 200 mm.
         let mut r = clear;
         r[2] = Reading::Range(300);
-        assert_eq!(free_distance_mm(&c, &r, Angle::ZERO), 280);
+        assert_eq!(free_distance_mm(&c, &r, Angle::ZERO), 200);
+        let mut r6 = clear;
+        r6[2] = Reading::Range(600);
+        assert_eq!(free_distance_mm(&c, &r6, Angle::ZERO), 500);
         // Heading 20° right, towards the −20° beam's end (900 mm, clear):
         // 900 − 120 = 780; the front obstacle at 400 mm is 136.8 mm to the
         // side, outside the 120 mm half-width.
         assert_eq!(free_distance_mm(&c, &r, Angle::from_deg(-20)), 780);
         // Heading 10° right: front point lateral 400·sin10° = 69.5,
-        // along 393.9, half chord √(120² − 69.5²) = 97.8 → 296.
+        // along 393.9, half chord √(120² − 69.5²) = 97.8 → 296; stand-off
+        // 393.9 − 200 = 193.9 → 194.
         let got = free_distance_mm(&c, &r, Angle::from_deg(-10));
-        assert!((got as i32 - 296).abs() <= 1, "{got}");
+        assert!((got as i32 - 194).abs() <= 1, "{got}");
         // Too close at the front: nothing ahead is free.
         let mut r = clear;
         r[2] = Reading::TooClose;
@@ -138,7 +152,7 @@ mod tests {
         assert_eq!(guard(&c, &r, 500), Guard::Continue);
         r[2] = Reading::Range(200);
         assert_eq!(guard(&c, &r, 500), Guard::Stop);
-        assert_eq!(guard(&c, &r, 150), Guard::Continue);
+        assert_eq!(guard(&c, &r, 100), Guard::Continue);
         r[0] = Reading::Implausible;
         assert_eq!(guard(&c, &r, 0), Guard::Stop);
     }

@@ -24,7 +24,7 @@ pub enum ConfigError {
     GoalTolerance,
     /// A tolerance angle outside 0 ..= 30°.
     AngleTolerance,
-    /// Clearance margin above 500 mm.
+    /// Clearance or stand-off above 500 mm.
     Clearance,
     /// Escape parameters out of range (see [`crate::escape`]).
     Escape,
@@ -48,6 +48,7 @@ pub struct Config {
     pub(crate) xi_sen: i32,
     pub(crate) goal_tolerance_mm: u16,
     pub(crate) clearance_mm: u16,
+    pub(crate) standoff_mm: u16,
     pub(crate) min_step_mm: u16,
     pub(crate) diagonal_tolerance: Angle,
     pub(crate) direct_tolerance: Angle,
@@ -110,6 +111,7 @@ pub struct ConfigBuilder {
     xi_sen: i32,
     goal_tolerance_mm: u16,
     clearance_mm: u16,
+    standoff_mm: u16,
     min_step_mm: u16,
     diagonal_tolerance_deg: i16,
     direct_tolerance_deg: i16,
@@ -130,7 +132,8 @@ impl ConfigBuilder {
     /// | ξ_MP | 1 | paper eq. 12 |
     /// | ξ (off-sensor) | 1 | paper eq. 14 |
     /// | goal tolerance | 50 mm | ours |
-    /// | clearance | 20 mm | ours (safety rule, §5) |
+    /// | clearance | 20 mm | ours: lateral margin of the safety rule (§5) |
+    /// | stand-off | 100 mm | ours: obstacles ahead stay this far from the sensor faces (the sensor's minimum range, so never in fold-back) |
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
     /// | DM tolerance | 5° from the target bearing | ours |
@@ -146,6 +149,7 @@ impl ConfigBuilder {
             xi_sen: FORCE_ONE,
             goal_tolerance_mm: 50,
             clearance_mm: 20,
+            standoff_mm: 100,
             min_step_mm: 10,
             diagonal_tolerance_deg: 5,
             direct_tolerance_deg: 5,
@@ -189,6 +193,11 @@ impl ConfigBuilder {
     /// Clearance kept beyond the robot radius by the safety rule, mm.
     pub fn clearance_mm(mut self, v: u16) -> Self {
         self.clearance_mm = v;
+        self
+    }
+    /// Distance kept between obstacles ahead and the sensor faces, mm.
+    pub fn standoff_mm(mut self, v: u16) -> Self {
+        self.standoff_mm = v;
         self
     }
     /// Angle tolerances in degrees: XY classification (eq. 13) and DM motion.
@@ -240,7 +249,7 @@ impl ConfigBuilder {
         if !tol_ok(self.diagonal_tolerance_deg) || !tol_ok(self.direct_tolerance_deg) {
             return Err(ConfigError::AngleTolerance);
         }
-        if self.clearance_mm > 500 {
+        if self.clearance_mm > 500 || self.standoff_mm > 500 {
             return Err(ConfigError::Clearance);
         }
         if !self.escape.is_valid() {
@@ -268,6 +277,7 @@ impl ConfigBuilder {
             xi_sen: self.xi_sen,
             goal_tolerance_mm: self.goal_tolerance_mm,
             clearance_mm: self.clearance_mm,
+            standoff_mm: self.standoff_mm,
             min_step_mm: self.min_step_mm,
             diagonal_tolerance: Angle::from_deg(self.diagonal_tolerance_deg),
             direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),

@@ -2,27 +2,43 @@
 //! idea of Moaveni & Ghanbari Gol (ALGORITHMS.md §3) applied online.
 //!
 //! A droplet caught in a pit raises the level there so the next one flows
-//! past. Online, the rover is "in a pit" when it stops getting nearer to the
-//! goal: the progress monitor remembers the best distance to the goal so far
-//! and, when `window_steps` planner cycles pass without beating it by
-//! `progress_mm`, drops a virtual obstacle where the rover stands. Every
-//! virtual obstacle repels with the §3 clearance `r_v = |V − X| − (V_r + A_r)`
-//! and the EAPF force law of eq. 10 (`K_v / r_v²`, away from `V`), so the
-//! pit fills and the rover spills out of it. An oscillation or a loop is
-//! also "no progress", so it is caught the same way.
+//! past. Online, the rover is "in a pit" (ALGORITHMS.md §3) when either
 //!
-//! Bounded memory: at most [`VIRTUAL_CAPACITY`] virtual obstacles; when full,
-//! the oldest is dropped (the newest fill the pit the rover is in now).
+//! * it is **stuck**: over the last `window_steps` planner cycles its net
+//!   displacement stayed below `stuck_mm` (it dithers or oscillates), or
+//! * it **loops**: it comes back within `revisit_mm` of a breadcrumb it left
+//!   earlier (a breadcrumb is dropped every `crumb_mm` of travel; the two
+//!   newest do not count).
 //!
-//! Give-up: when `give_up_drops` virtual obstacles have been dropped since
-//! the last new best distance, escape is making no progress and the goal is
-//! reported unreachable (a walled-in goal never lets the best improve).
+//! Then a virtual obstacle of radius `V_r` is dropped where the rover stands
+//! (§3: "put a virtual obstacle there"). It repels with `K_v / d²`, `d` the
+//! distance from its centre but never less than `V_r` (the §3 potential
+//! `K_v / r²` made finite inside the obstacle, as a force with the law of
+//! eq. 10), away from `V` (away from the goal for a rover standing exactly
+//! on it). `K_v` = 0.1 makes it worth 4.4 units at its rim, about twice the
+//! attraction: enough to destroy the minimum, not so much that the rover
+//! flees. The pit fills and the rover spills out of it.
+//!
+//! Bounded memory: at most [`VIRTUAL_CAPACITY`] virtual obstacles,
+//! [`CRUMB_CAPACITY`] breadcrumbs and [`WINDOW_CAPACITY`] recent positions;
+//! when full, the oldest is dropped (the newest describe the pit the rover
+//! is in now).
+//!
+//! Give-up: when `give_up_drops` virtual obstacles have been dropped, or
+//! `give_up_steps` cycles have passed, since the rover last came
+//! `progress_mm` nearer the goal than ever before, escape is making no
+//! progress and the goal is reported unreachable (a walled-in goal never
+//! lets the best distance improve).
 
 use crate::fixed::{inverse_square_force, Angle, Force, Point, FORCE_ONE};
 use heapless::Deque;
 
 /// Most virtual obstacles kept.
 pub const VIRTUAL_CAPACITY: usize = 24;
+/// Most breadcrumbs kept.
+pub const CRUMB_CAPACITY: usize = 16;
+/// Longest stuck-detection window, cycles.
+pub const WINDOW_CAPACITY: usize = 16;
 
 /// Escape parameters.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -30,9 +46,15 @@ pub const VIRTUAL_CAPACITY: usize = 24;
 pub struct EscapeConfig {
     /// Whether virtual obstacles are used at all (off: plain EAPF).
     pub enabled: bool,
-    /// Planner cycles allowed without a new best distance (2 ..= 1000).
+    /// Stuck-detection window, planner cycles (2 ..= 16).
     pub window_steps: u16,
-    /// How much nearer the goal counts as progress, mm (1 ..= 2000).
+    /// Net displacement over the window below which the rover is stuck, mm.
+    pub stuck_mm: u16,
+    /// Travel between breadcrumbs, mm (20 ..= 5000).
+    pub crumb_mm: u16,
+    /// Coming this near an old breadcrumb is a loop, mm (below `crumb_mm`).
+    pub revisit_mm: u16,
+    /// How much nearer the goal than ever before counts as progress, mm (1 ..= 2000).
     pub progress_mm: u16,
     /// Radius of a virtual obstacle, mm (`V_r`, 10 ..= 2000).
     pub radius_mm: u16,
@@ -40,17 +62,23 @@ pub struct EscapeConfig {
     pub k_v: i32,
     /// Virtual obstacles without progress before giving up (1 ..= 1000).
     pub give_up_drops: u16,
+    /// Planner cycles without progress before giving up (10 ..= 60000).
+    pub give_up_steps: u16,
 }
 
 impl Default for EscapeConfig {
     fn default() -> Self {
         EscapeConfig {
             enabled: true,
-            window_steps: 10,
+            window_steps: 12,
+            stuck_mm: 150,
+            crumb_mm: 400,
+            revisit_mm: 150,
             progress_mm: 100,
             radius_mm: 150,
-            k_v: FORCE_ONE,
+            k_v: FORCE_ONE / 10,
             give_up_drops: 40,
+            give_up_steps: 400,
         }
     }
 }
@@ -58,7 +86,11 @@ impl Default for EscapeConfig {
 impl EscapeConfig {
     /// Whether every field is in its documented range.
     pub fn is_valid(&self) -> bool {
-        (2..=1_000).contains(&self.window_steps)
+        (2..=WINDOW_CAPACITY as u16).contains(&self.window_steps)
+            && (20..=5_000).contains(&self.crumb_mm)
+            && self.revisit_mm < self.crumb_mm
+            && self.stuck_mm <= 5_000
+            && (10..=60_000).contains(&self.give_up_steps)
             && (1..=2_000).contains(&self.progress_mm)
             && (10..=2_000).contains(&self.radius_mm)
             && (1..=16 * FORCE_ONE).contains(&self.k_v)
@@ -84,6 +116,9 @@ pub struct Escape {
     best_mm: u16,
     since_best: u16,
     drops_since_best: u16,
+    dropped: u16,
+    recent: Deque<Point, WINDOW_CAPACITY>,
+    crumbs: Deque<Point, CRUMB_CAPACITY>,
     obstacles: Deque<Point, VIRTUAL_CAPACITY>,
 }
 
@@ -100,6 +135,9 @@ impl Escape {
             best_mm: u16::MAX,
             since_best: 0,
             drops_since_best: 0,
+            dropped: 0,
+            recent: Deque::new(),
+            crumbs: Deque::new(),
             obstacles: Deque::new(),
         }
     }
@@ -121,44 +159,72 @@ impl Escape {
         if !cfg.enabled {
             return Verdict::Continue;
         }
-        if goal_mm.saturating_add(cfg.progress_mm) <= self.best_mm || self.best_mm == u16::MAX {
+        if self.best_mm == u16::MAX || goal_mm.saturating_add(cfg.progress_mm) <= self.best_mm {
             self.best_mm = goal_mm;
             self.since_best = 0;
             self.drops_since_best = 0;
-            return Verdict::Continue;
+        } else {
+            self.since_best = self.since_best.saturating_add(1);
         }
-        self.since_best = self.since_best.saturating_add(1);
-        if self.since_best < cfg.window_steps {
-            return Verdict::Continue;
-        }
-        self.since_best = 0;
-        self.drops_since_best = self.drops_since_best.saturating_add(1);
-        if self.drops_since_best > cfg.give_up_drops {
+        if self.since_best > cfg.give_up_steps || self.drops_since_best >= cfg.give_up_drops {
             return Verdict::GiveUp;
         }
-        // The rover stands at the rim of the new obstacle, on the goal side
-        // of it: the obstacle fills the pit between the rover and the goal.
-        let v = robot.offset(bearing, cfg.radius_mm);
+        // Stuck: little net displacement over the window.
+        if self.recent.len() >= cfg.window_steps as usize {
+            self.recent.pop_front();
+        }
+        let _ = self.recent.push_back(robot);
+        let stuck = self.recent.len() >= cfg.window_steps as usize
+            && self
+                .recent
+                .front()
+                .is_some_and(|&p| p.distance_mm(robot) < cfg.stuck_mm);
+        // Loop: back near an old breadcrumb.
+        let n = self.crumbs.len();
+        let looped = self
+            .crumbs
+            .iter()
+            .take(n.saturating_sub(2))
+            .any(|c| c.distance_mm(robot) < cfg.revisit_mm);
+        if self
+            .crumbs
+            .back()
+            .is_none_or(|c| c.distance_mm(robot) >= cfg.crumb_mm)
+        {
+            if self.crumbs.is_full() {
+                self.crumbs.pop_front();
+            }
+            let _ = self.crumbs.push_back(robot);
+        }
+        if !(stuck || looped) {
+            return Verdict::Continue;
+        }
+        self.recent.clear();
+        if looped {
+            self.crumbs.clear();
+        }
+        self.drops_since_best = self.drops_since_best.saturating_add(1);
+        let _ = bearing;
+        let v = robot;
         if self.obstacles.is_full() {
             self.obstacles.pop_front();
         }
         let _ = self.obstacles.push_back(v);
+        self.dropped = self.dropped.saturating_add(1);
         Verdict::Dropped
     }
 
-    /// The summed repulsion of the virtual obstacles on a robot of radius
-    /// `robot_radius_mm` at `robot`: `K_v / r_v²` away from each (§3, eq. 10 law).
-    pub fn force(&self, cfg: &EscapeConfig, robot: Point, robot_radius_mm: u16) -> Force {
+    /// The summed repulsion of the virtual obstacles on the rover at
+    /// `robot`, whose goal bearing is `bearing`: `K_v / max(d, V_r)²` each.
+    pub fn force(&self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
         let mut f = Force::ZERO;
         for v in self.obstacles.iter() {
             let (dx, dy) = v.to(robot);
-            let d = robot.distance_mm(*v);
-            let clearance = d.saturating_sub(cfg.radius_mm + robot_radius_mm);
-            // (1/r²)·K_v in Q10 without 64-bit maths: ≤ 7,750 · 16,384 fits in i32.
-            let mag = ((inverse_square_force(clearance) >> 4) * cfg.k_v)
-                >> (crate::fixed::FORCE_SHIFT - 4);
+            let d = robot.distance_mm(*v).max(cfg.radius_mm);
+            // (1/d²)·K_v in Q10 without 64-bit maths: ≤ 7,750 · 16,384 fits in i32.
+            let mag = ((inverse_square_force(d) >> 4) * cfg.k_v) >> (crate::fixed::FORCE_SHIFT - 4);
             let dir = if dx == 0 && dy == 0 {
-                Angle::ZERO
+                bearing.add(Angle::HALF)
             } else {
                 Angle::atan2(dy, dx)
             };
@@ -182,6 +248,11 @@ impl Escape {
         self.obstacles.is_empty()
     }
 
+    /// Virtual obstacles dropped in all (including evicted ones).
+    pub fn dropped(&self) -> u16 {
+        self.dropped
+    }
+
     /// Best distance to the goal so far, mm.
     pub fn best_mm(&self) -> u16 {
         self.best_mm
@@ -193,7 +264,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn progress_resets_and_stagnation_drops_then_gives_up() {
+    fn stuck_rover_drops_then_gives_up() {
         let cfg = EscapeConfig {
             window_steps: 3,
             give_up_drops: 2,
@@ -201,34 +272,102 @@ mod tests {
         };
         let mut e = Escape::new();
         let p = Point::new(0, 0);
+        // Cycles 1, 2: window not full yet.
         assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 1_800, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.best_mm(), 1_800);
-        // Less than progress_mm better is no progress.
-        assert_eq!(e.observe(&cfg, p, 1_750, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 1_750, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 1_750, Angle::ZERO), Verdict::Dropped);
-        assert_eq!(e.len(), 1);
-        // The obstacle sits radius_mm towards the goal.
-        assert_eq!(*e.obstacles().next().unwrap(), Point::new(150, 0));
-        for _ in 0..2 {
-            e.observe(&cfg, p, 1_750, Angle::ZERO);
+        assert_eq!(
+            e.observe(&cfg, Point::new(50, 0), 1_950, Angle::ZERO),
+            Verdict::Continue
+        );
+        // Cycle 3: 100 mm net over the window < 150 mm → stuck.
+        assert_eq!(
+            e.observe(&cfg, Point::new(100, 0), 1_950, Angle::ZERO),
+            Verdict::Dropped
+        );
+        // The obstacle sits where the rover stands.
+        assert_eq!(*e.obstacles().next().unwrap(), Point::new(100, 0));
+        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Dropped);
+        // Two drops without a new best distance: give up.
+        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::GiveUp);
+        assert_eq!(e.dropped(), 2);
+    }
+
+    #[test]
+    fn moving_rover_is_not_stuck_but_a_loop_is_caught() {
+        let cfg = EscapeConfig::default();
+        let mut e = Escape::new();
+        // Drive a 1.2 m square, 200 mm per cycle, and come back to the start.
+        let mut pts = heapless::Vec::<Point, 32>::new();
+        for i in 0..6 {
+            pts.push(Point::new(200 * i, 0)).unwrap();
         }
-        assert_eq!(e.observe(&cfg, p, 1_750, Angle::ZERO), Verdict::Dropped);
-        for _ in 0..2 {
-            e.observe(&cfg, p, 1_750, Angle::ZERO);
+        for i in 0..6 {
+            pts.push(Point::new(1_200, 200 * i)).unwrap();
         }
-        assert_eq!(e.observe(&cfg, p, 1_750, Angle::ZERO), Verdict::GiveUp);
+        for i in 0..6 {
+            pts.push(Point::new(1_200 - 200 * i, 1_200)).unwrap();
+        }
+        for i in 0..6 {
+            pts.push(Point::new(0, 1_200 - 200 * i)).unwrap();
+        }
+        let mut verdicts = heapless::Vec::<Verdict, 32>::new();
+        for &p in pts.iter() {
+            verdicts
+                .push(e.observe(&cfg, p, 5_000, Angle::ZERO))
+                .unwrap();
+        }
+        // No drop while going round; the return to the first crumb is a loop.
+        assert!(
+            verdicts[..23].iter().all(|&v| v == Verdict::Continue),
+            "{verdicts:?}"
+        );
+        assert_eq!(
+            e.observe(&cfg, Point::new(0, 0), 5_000, Angle::ZERO),
+            Verdict::Dropped
+        );
+    }
+
+    #[test]
+    fn progress_resets_the_give_up_budget() {
+        let cfg = EscapeConfig {
+            window_steps: 2,
+            give_up_drops: 2,
+            ..EscapeConfig::default()
+        };
+        let mut e = Escape::new();
+        let p = Point::new(0, 0);
+        e.observe(&cfg, p, 3_000, Angle::ZERO);
+        assert_eq!(e.observe(&cfg, p, 3_000, Angle::ZERO), Verdict::Dropped);
+        // 200 mm nearer than ever: budget restored.
+        e.observe(&cfg, p, 2_800, Angle::ZERO);
+        assert_eq!(e.best_mm(), 2_800);
+        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Dropped);
+        // Each drop clears the window, so the next comes two cycles later.
+        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Dropped);
+        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::GiveUp);
     }
 
     #[test]
     fn virtual_obstacle_force_by_hand() {
-        let cfg = EscapeConfig::default();
+        let cfg = EscapeConfig {
+            k_v: FORCE_ONE,
+            ..EscapeConfig::default()
+        };
         let mut e = Escape::new();
         e.obstacles.push_back(Point::new(0, 0)).unwrap();
-        // Robot 750 mm to the right: r_v = 750 − (150 + 100) = 500 mm → 4 units.
-        let f = e.force(&cfg, Point::new(750, 0), 100);
-        assert_eq!(f, Force { x: 4_096, y: 0 });
+        // K_v = 1, rover 500 mm to the right: 1/0.5² = 4 units along +x.
+        assert_eq!(
+            e.force(&cfg, Point::new(500, 0), Angle::ZERO),
+            Force { x: 4_096, y: 0 }
+        );
+        // Inside the radius the distance counts as V_r = 150 mm: 44.4 units.
+        let f = e.force(&cfg, Point::new(0, 100), Angle::ZERO);
+        assert_eq!((f.x, f.y / 1024), (0, 44));
+        // Exactly on it: away from the goal.
+        let f = e.force(&cfg, Point::new(0, 0), Angle::ZERO);
+        assert!(f.x < -44 * 1024 && f.y == 0, "{f:?}");
         assert!(!EscapeConfig {
             window_steps: 0,
             ..cfg
@@ -244,10 +383,10 @@ mod tests {
             ..EscapeConfig::default()
         };
         let mut e = Escape::new();
-        e.observe(&cfg, Point::new(0, 0), 1_000, Angle::ZERO);
         for i in 0..(2 * (VIRTUAL_CAPACITY as i16 + 5)) {
             e.observe(&cfg, Point::new(i, 0), 1_000, Angle::ZERO);
         }
+        assert!(e.dropped() as usize > VIRTUAL_CAPACITY);
         assert_eq!(e.len(), VIRTUAL_CAPACITY);
     }
 }

@@ -190,7 +190,7 @@ impl Planner {
         // midpoint and off-sensor forces.
         let mut f = forces::attractive(cfg, bearing)
             .plus(forces::repulsive(cfg, pose.heading, &points))
-            .plus(self.escape.force(&cfg.escape, robot, cfg.robot_radius_mm));
+            .plus(self.escape.force(&cfg.escape, robot, bearing));
         if !near {
             let (_, ax, ay) = self.memory.away_from_midpoint(robot, self.goal);
             f = f.plus(forces::midpoint(cfg, ax, ay));
@@ -199,7 +199,7 @@ impl Planner {
             }
         }
         // Eq. 17.
-        let heading = f.direction().unwrap_or(bearing);
+        let mut heading = f.direction().unwrap_or(bearing);
 
         // The paper's step: the sensor range when free, else the farthest
         // detection plus the robot's width.
@@ -213,9 +213,22 @@ impl Planner {
         };
 
         // Safety (§5): never outside the sensed sector, never beyond what the
-        // readings show free.
-        let relative = heading.sub(pose.heading);
-        let mut step = if relative.abs_signed() > cfg.sector_half_width().0 {
+        // readings show free. Ours: with something in the way, turn at most
+        // to the edge of the sector towards the heading, so that the next
+        // cycle still sees the obstacle; a full turn away would lose sight of
+        // it and the attraction would turn the rover straight back (a
+        // livelock of turns). Bounded turns make it slide along the obstacle.
+        let half = cfg.sector_half_width();
+        let mut relative = heading.sub(pose.heading);
+        if !points.is_empty() && relative.abs_signed() > half.0 {
+            relative = if relative.signed() > 0 {
+                half
+            } else {
+                half.neg()
+            };
+            heading = pose.heading.add(relative);
+        }
+        let mut step = if relative.abs_signed() > half.0 {
             0
         } else {
             self.paper_step_mm
@@ -324,9 +337,11 @@ mod tests {
             .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= 300)
             .unwrap();
         let out = p.step_raw(at(0, 0, 0), &[0, 0, c300, 0, 0]);
-        // Attraction 2 forward, repulsion 1/0.4² = 6.25 back: heading reverses.
-        assert_eq!(out.command.heading, Angle::HALF);
-        assert_eq!(out.command.step_mm, 0);
+        // Attraction 2 forward, repulsion 1/0.4² = 6.25 back: the heading
+        // reverses, so the rover turns to the sector's edge (±40°) instead,
+        // keeping the obstacle in view, and may step along it if free.
+        assert_eq!(out.command.heading.abs_signed(), Angle::from_deg(40).0);
+        assert!(out.command.step_mm <= 780);
         assert_eq!(p.last_collision_points().len(), 1);
         assert_eq!(p.memory().len(), 1);
     }

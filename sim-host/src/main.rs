@@ -1,1 +1,223 @@
-fn main() {}
+//! `sim-host`: run the planner-core in simulated worlds.
+
+use clap::{Parser, Subcommand};
+use sim_host::planners::PlannerKind;
+use sim_host::scenario::{collect, Scenario};
+use sim_host::sensor::SensorMode;
+use sim_host::sim::{self, SimConfig};
+use sim_host::{bench, generate, reference, svg};
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+#[derive(Parser)]
+#[command(
+    name = "sim-host",
+    version,
+    about = "Simulated worlds for the rover's planner-core"
+)]
+struct Cli {
+    #[command(subcommand)]
+    cmd: Cmd,
+}
+
+#[derive(Subcommand)]
+enum Cmd {
+    /// One run: prints the outcome and the figures.
+    Run {
+        /// Scenario file (format 1).
+        file: PathBuf,
+        /// Planner.
+        #[arg(long, value_enum, default_value = "eapf")]
+        planner: PlannerKind,
+        /// Seed for sensor noise and slip.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Write a picture of the run.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// Write the true driven path as CSV (t,x,y,heading).
+        #[arg(long)]
+        trace: Option<PathBuf>,
+        /// Noise-free, instant sensors without fold-back.
+        #[arg(long)]
+        perfect: bool,
+    },
+    /// Every scenario under the given files or folders, in parallel.
+    Bench {
+        /// Files or folders.
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Planner.
+        #[arg(long, value_enum, default_value = "eapf")]
+        planner: PlannerKind,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Worker threads (default: all cores).
+        #[arg(long)]
+        jobs: Option<usize>,
+        /// Write one JSON object per run.
+        #[arg(long)]
+        json: Option<PathBuf>,
+        /// Totals only.
+        #[arg(long)]
+        summary: bool,
+        /// Noise-free sensors.
+        #[arg(long)]
+        perfect: bool,
+    },
+    /// Write a random circle world with the paper's parameters.
+    Gen {
+        /// Output file.
+        out: PathBuf,
+        /// Seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Start x y.
+        #[arg(long, num_args = 2, default_values_t = [6.0, 7.3])]
+        start: Vec<f64>,
+        /// Goal x y.
+        #[arg(long, num_args = 2, default_values_t = [12.7, 9.75])]
+        goal: Vec<f64>,
+    },
+}
+
+fn main() -> ExitCode {
+    match real_main(Cli::parse()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("sim-host: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn sensors(perfect: bool) -> SensorMode {
+    if perfect {
+        SensorMode::Perfect
+    } else {
+        SensorMode::REALISTIC
+    }
+}
+
+fn real_main(cli: Cli) -> Result<(), String> {
+    match cli.cmd {
+        Cmd::Run {
+            file,
+            planner,
+            seed,
+            svg: svg_out,
+            trace,
+            perfect,
+        } => {
+            let sc = Scenario::load(&file).map_err(|e| e.to_string())?;
+            let cfg = SimConfig {
+                planner,
+                seed,
+                sensors: sensors(perfect),
+                ..SimConfig::default()
+            };
+            let refp = reference::shortest_path(&sc);
+            let res = sim::run(&sc, &cfg, refp.as_ref().map(|r| r.length));
+            println!("scenario     {}", sc.name);
+            println!("planner      {}", planner.name());
+            println!("outcome      {}", res.outcome.as_str());
+            println!("steps        {}", res.steps);
+            println!("path_length  {:.3} m", res.path_length);
+            match &refp {
+                Some(r) => println!(
+                    "reference    {:.3} m (ratio {:.3})",
+                    r.length,
+                    res.path_length / r.length
+                ),
+                None => println!("reference    none (no path on the reference grid)"),
+            }
+            println!("min_clear    {:.3} m", res.min_clearance);
+            println!("virtual_obs  {}", res.virtual_dropped);
+            if let Some(out) = svg_out {
+                let pic = svg::render(
+                    &sc,
+                    &res,
+                    planner.name(),
+                    refp.as_ref().map(|r| r.path.as_slice()),
+                );
+                write(&out, &pic)?;
+                println!("svg          {}", out.display());
+            }
+            if let Some(out) = trace {
+                write(&out, &sim::trace_csv(&res.trace))?;
+                println!("trace        {}", out.display());
+            }
+            Ok(())
+        }
+        Cmd::Bench {
+            paths,
+            planner,
+            seed,
+            jobs,
+            json,
+            summary,
+            perfect,
+        } => {
+            if let Some(j) = jobs {
+                rayon::ThreadPoolBuilder::new()
+                    .num_threads(j.max(1))
+                    .build_global()
+                    .map_err(|e| e.to_string())?;
+            }
+            let files = collect(&paths)?;
+            if files.is_empty() {
+                return Err("no scenario files found".into());
+            }
+            let cfg = SimConfig {
+                planner,
+                seed,
+                sensors: sensors(perfect),
+                ..SimConfig::default()
+            };
+            let rows = bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?;
+            print!("{}", bench::table(&rows, summary));
+            if let Some(out) = json {
+                let lines: Vec<String> = rows
+                    .iter()
+                    .map(|r| serde_json::to_string(r).map_err(|e| e.to_string()))
+                    .collect::<Result<_, _>>()?;
+                write(&out, &(lines.join("\n") + "\n"))?;
+            }
+            Ok(())
+        }
+        Cmd::Gen {
+            out,
+            seed,
+            start,
+            goal,
+        } => {
+            let name = out
+                .file_stem()
+                .map(|s| s.to_string_lossy().into_owned())
+                .unwrap_or_else(|| "random".into());
+            let w = generate::RandomWorld::paper_env2(
+                &name,
+                [start[0], start[1]],
+                [goal[0], goal[1]],
+                seed,
+            );
+            write(
+                &out,
+                &w.to_toml("random circle world with the EAPF paper's environment 2 parameters"),
+            )?;
+            Scenario::load(&out).map_err(|e| e.to_string())?;
+            println!("wrote {}", out.display());
+            Ok(())
+        }
+    }
+}
+
+fn write(path: &PathBuf, text: &str) -> Result<(), String> {
+    if let Some(dir) = path.parent() {
+        if !dir.as_os_str().is_empty() {
+            std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+        }
+    }
+    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+}

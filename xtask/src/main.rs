@@ -1,1 +1,223 @@
-fn main() {}
+//! Project tasks: `cargo xtask ci` runs every check the project has (the
+//! README's test command); `cargo xtask avr-report` and `cargo xtask
+//! stm32-report` print the firmware figures.
+//!
+//! `ci` installs what it needs on a fresh Debian machine of the project's
+//! kind: rustup targets and components always, Debian packages when it runs
+//! as root (otherwise it stops and prints the exact command to run).
+
+use std::path::{Path, PathBuf};
+use std::process::{exit, Command};
+
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("xtask lives one level below the workspace root")
+        .to_path_buf()
+}
+
+/// Run a command in `dir`, echoing it; exit on failure.
+fn run(dir: &Path, cmd: &str, args: &[&str], envs: &[(&str, &str)]) {
+    eprintln!("\n==> {cmd} {}", args.join(" "));
+    let status = Command::new(cmd)
+        .args(args)
+        .current_dir(dir)
+        .envs(envs.iter().copied())
+        // The firmware workspaces pick their own toolchains; do not leak ours.
+        .env_remove("RUSTUP_TOOLCHAIN")
+        .env_remove("CARGO")
+        .status()
+        .unwrap_or_else(|e| {
+            eprintln!("xtask: cannot start {cmd}: {e}");
+            exit(1)
+        });
+    if !status.success() {
+        eprintln!("xtask: `{cmd} {}` failed ({status})", args.join(" "));
+        exit(1);
+    }
+}
+
+fn output(cmd: &str, args: &[&str]) -> String {
+    Command::new(cmd)
+        .args(args)
+        .env_remove("RUSTUP_TOOLCHAIN")
+        .output()
+        .map(|o| String::from_utf8_lossy(&o.stdout).into_owned())
+        .unwrap_or_default()
+}
+
+const DEBIAN_PACKAGES: &[&str] = &[
+    "gcc-avr",
+    "avr-libc",
+    "simavr",
+    "qemu-system-arm",
+    "libclang-dev",
+    "libelf-dev",
+    "libzstd-dev",
+    "pkg-config",
+    "zlib1g-dev",
+];
+
+/// Make sure the toolchains, targets, components and Debian packages exist.
+fn ensure_tools() {
+    let dir = root();
+    let targets = output(
+        "rustup",
+        &["target", "list", "--installed", "--toolchain", "stable"],
+    );
+    if !targets.contains("thumbv7em-none-eabihf") {
+        run(
+            &dir,
+            "rustup",
+            &[
+                "target",
+                "add",
+                "thumbv7em-none-eabihf",
+                "--toolchain",
+                "stable",
+            ],
+            &[],
+        );
+    }
+    let comps = output(
+        "rustup",
+        &["component", "list", "--installed", "--toolchain", "stable"],
+    );
+    for c in ["rustfmt", "clippy", "llvm-tools"] {
+        if !comps.contains(c) {
+            run(
+                &dir,
+                "rustup",
+                &["component", "add", c, "--toolchain", "stable"],
+                &[],
+            );
+        }
+    }
+    let nightly = output(
+        "rustup",
+        &["component", "list", "--installed", "--toolchain", "nightly"],
+    );
+    if nightly.is_empty() {
+        eprintln!(
+            "xtask: the `nightly` toolchain is missing; run: rustup toolchain install nightly"
+        );
+        exit(1);
+    }
+    for c in ["rust-src", "llvm-tools"] {
+        if !nightly.contains(c) {
+            run(
+                &dir,
+                "rustup",
+                &["component", "add", c, "--toolchain", "nightly"],
+                &[],
+            );
+        }
+    }
+    let missing: Vec<&str> = DEBIAN_PACKAGES
+        .iter()
+        .copied()
+        .filter(|p| {
+            !Command::new("dpkg")
+                .args(["-s", p])
+                .output()
+                .map(|o| o.status.success())
+                .unwrap_or(false)
+        })
+        .collect();
+    if !missing.is_empty() {
+        let is_root = output("id", &["-u"]).trim() == "0";
+        if !is_root {
+            eprintln!(
+                "xtask: missing Debian packages; run:\n  sudo apt-get update && sudo apt-get install -y --no-install-recommends {}",
+                missing.join(" ")
+            );
+            exit(1);
+        }
+        run(&dir, "apt-get", &["update", "-qq"], &[]);
+        let mut args = vec!["install", "-y", "-qq", "--no-install-recommends"];
+        args.extend(missing.iter().copied());
+        run(
+            &dir,
+            "apt-get",
+            &args,
+            &[("DEBIAN_FRONTEND", "noninteractive")],
+        );
+    }
+}
+
+/// planner-core for the two MCU targets.
+fn cross_builds() {
+    let dir = root();
+    run(
+        &dir,
+        "cargo",
+        &[
+            "+stable",
+            "build",
+            "--release",
+            "-p",
+            "planner-core",
+            "--features",
+            "hal02",
+            "--target",
+            "thumbv7em-none-eabihf",
+        ],
+        &[],
+    );
+    run(
+        &dir,
+        "cargo",
+        &[
+            "+nightly",
+            "build",
+            "--release",
+            "-p",
+            "planner-core",
+            "--target",
+            "avr-none",
+            "-Zbuild-std=core",
+            "--target-dir",
+            "target/avr",
+        ],
+        &[("RUSTFLAGS", "-C target-cpu=atmega328p")],
+    );
+}
+
+fn ci() {
+    ensure_tools();
+    let dir = root();
+    run(&dir, "cargo", &["+stable", "fmt", "--all", "--check"], &[]);
+    run(
+        &dir,
+        "cargo",
+        &[
+            "+stable",
+            "clippy",
+            "--workspace",
+            "--all-targets",
+            "--",
+            "-D",
+            "warnings",
+        ],
+        &[],
+    );
+    run(&dir, "cargo", &["+stable", "test", "--workspace"], &[]);
+    cross_builds();
+    eprintln!("\nxtask ci: all checks passed");
+}
+
+fn main() {
+    let task = std::env::args().nth(1).unwrap_or_default();
+    match task.as_str() {
+        "ci" => ci(),
+        "cross" => cross_builds(),
+        _ => {
+            eprintln!("usage: cargo xtask <ci|cross>");
+            eprintln!(
+                "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
+            );
+            eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
+            exit(2);
+        }
+    }
+}

@@ -1,0 +1,101 @@
+//! Property tests of the planner's invariants over any input.
+
+use planner_core::command::free_distance_mm;
+use planner_core::{
+    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Point, Pose, Reading, Status,
+};
+use proptest::prelude::*;
+
+fn pose() -> impl Strategy<Value = Pose> {
+    (any::<i16>(), any::<i16>(), any::<u16>()).prop_map(|(x, y, h)| Pose {
+        position: Point::new(x, y),
+        heading: Angle(h),
+    })
+}
+
+/// Mostly counts a sensor can give (so the planner moves), sometimes any.
+fn counts() -> impl Strategy<Value = u16> {
+    prop_oneof![12 => 0u16..700, 1 => any::<u16>()]
+}
+
+proptest! {
+    #![proptest_config(ProptestConfig { cases: 3_000, ..ProptestConfig::default() })]
+
+    /// Any raw counts, any pose, any goal, several cycles: no panic; the
+    /// step is within [0, range]; the safety rule holds; a heading outside
+    /// the sensed sector is a pure turn; stops have a zero step.
+    #[test]
+    fn invariants_hold_for_any_input(
+        goal in (any::<i16>(), any::<i16>()),
+        cycles in prop::collection::vec((pose(), prop::array::uniform5(counts())), 1..6),
+        stm32 in any::<bool>(),
+    ) {
+        let adc = if stm32 { AdcProfile::STM32_12BIT_3V3 } else { AdcProfile::AVR_10BIT_5V };
+        let cfg = ConfigBuilder::new(adc).build().unwrap();
+        let range = cfg.sensor_range_mm();
+        let half = cfg.sector_half_width();
+        let mut p = Planner::new(cfg.clone(), Point::new(goal.0, goal.1));
+        for (pose, raw) in cycles {
+            let out = p.step_raw(pose, &raw);
+            let step = out.command.step_mm;
+            prop_assert!(step <= range);
+            let rel = out.command.heading.sub(pose.heading);
+            if rel.abs_signed() > half.0 {
+                prop_assert_eq!(step, 0);
+            }
+            if step > 0 {
+                prop_assert_eq!(out.status, Status::Moving);
+                let free = free_distance_mm(&cfg, p.last_readings(), rel);
+                prop_assert!(step <= free, "step {} > free {}", step, free);
+                prop_assert!(!p.last_readings().contains(&Reading::Implausible));
+            }
+            if out.status != Status::Moving {
+                prop_assert_eq!(step, 0);
+            }
+            // The guard never panics and agrees with the safety rule ahead.
+            let _ = p.guard_raw(&raw, step);
+        }
+    }
+
+    /// Any configuration values: building never panics; a built
+    /// configuration runs.
+    #[test]
+    fn any_config_builds_or_is_an_error(
+        radius in any::<u16>(), range in any::<u16>(), offset in any::<u16>(),
+        angles in prop::array::uniform5(any::<i16>()),
+        gains in (any::<i32>(), any::<i32>(), any::<i32>()),
+        tol in (any::<u16>(), any::<u16>(), any::<u16>()),
+        t in (any::<i16>(), any::<i16>()),
+        esc in (any::<bool>(), any::<u16>(), any::<u16>(), any::<u16>(), any::<u16>(), any::<i32>(), any::<u16>()),
+        bits in any::<u8>(), vref in any::<u16>(),
+        raw in prop::array::uniform5(any::<u16>()),
+    ) {
+        let escape = EscapeConfig {
+            enabled: esc.0,
+            window_steps: esc.1,
+            stuck_mm: esc.2,
+            crumb_mm: esc.3,
+            revisit_mm: esc.4,
+            k_v: esc.5,
+            give_up_drops: esc.6,
+            ..EscapeConfig::default()
+        };
+        let built = ConfigBuilder::new(AdcProfile { bits, vref_mv: vref })
+            .robot_radius_mm(radius)
+            .sensor_range_mm(range)
+            .sensor_offset_mm(offset)
+            .sensor_angles_deg(angles)
+            .gains_q10(gains.0, gains.1, gains.2)
+            .goal_tolerance_mm(tol.0)
+            .clearance_mm(tol.1)
+            .standoff_mm(tol.2)
+            .tolerances_deg(t.0, t.1)
+            .escape(escape)
+            .build();
+        if let Ok(cfg) = built {
+            let mut p = Planner::new(cfg, Point::new(1_000, 1_000));
+            let out = p.step_raw(Pose::default(), &raw);
+            prop_assert!(out.command.step_mm <= range);
+        }
+    }
+}

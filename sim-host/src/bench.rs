@@ -1,0 +1,212 @@
+//! Benchmarks: many scenarios in parallel, one JSON line and one table row
+//! per run, totals at the end.
+
+use crate::reference;
+use crate::scenario::{Scenario, ScenarioError};
+use crate::sim::{self, Outcome, SimConfig};
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use serde::Serialize;
+use std::fmt::Write;
+use std::path::PathBuf;
+
+/// One run's figures (also the `--json` line).
+#[derive(Clone, Debug, Serialize)]
+pub struct Row {
+    /// Scenario name.
+    pub name: String,
+    /// Planner name.
+    pub planner: String,
+    /// Exactly one of reached, collision, unreachable, timeout.
+    pub outcome: Outcome,
+    /// Planner cycles.
+    pub steps: usize,
+    /// Driven length, m.
+    pub path_length: f64,
+    /// Reference shortest length, m (null when there is none).
+    pub reference_length: Option<f64>,
+    /// Smallest clearance, m.
+    pub min_clearance: f64,
+    /// Virtual obstacles dropped.
+    pub virtual_obstacles: usize,
+    /// Whether the file says the scenario is solvable.
+    pub solvable: bool,
+    /// The file.
+    pub file: PathBuf,
+}
+
+impl Row {
+    /// `path_length / reference_length` for reached runs.
+    pub fn ratio(&self) -> Option<f64> {
+        match (self.outcome, self.reference_length) {
+            (Outcome::Reached, Some(r)) if r > 0.0 => Some(self.path_length / r),
+            _ => None,
+        }
+    }
+
+    /// Whether the outcome is the right one: reached when solvable,
+    /// unreachable when not, never a collision.
+    pub fn correct(&self) -> bool {
+        if self.solvable {
+            self.outcome == Outcome::Reached
+        } else {
+            self.outcome == Outcome::Unreachable
+        }
+    }
+}
+
+/// Run every scenario file; a bad file is an error before anything runs.
+pub fn run_all(
+    files: &[PathBuf],
+    cfg: &SimConfig,
+    progress: bool,
+) -> Result<Vec<Row>, ScenarioError> {
+    let scenarios: Vec<(PathBuf, Scenario)> = files
+        .iter()
+        .map(|f| Scenario::load(f).map(|s| (f.clone(), s)))
+        .collect::<Result<_, _>>()?;
+    let bar = if progress {
+        ProgressBar::new(scenarios.len() as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed_precise} {msg}")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let mut rows: Vec<Row> = scenarios
+        .par_iter()
+        .map(|(file, sc)| {
+            let refl = reference::shortest_path(sc).map(|r| r.length);
+            let res = sim::run(sc, cfg, refl);
+            bar.inc(1);
+            Row {
+                name: sc.name.clone(),
+                planner: cfg.planner.name().to_string(),
+                outcome: res.outcome,
+                steps: res.steps,
+                path_length: res.path_length,
+                reference_length: refl,
+                min_clearance: res.min_clearance,
+                virtual_obstacles: res.virtual_dropped,
+                solvable: sc.solvable,
+                file: file.clone(),
+            }
+        })
+        .collect();
+    bar.finish_and_clear();
+    rows.sort_by(|a, b| a.file.cmp(&b.file));
+    Ok(rows)
+}
+
+/// Totals over rows.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Totals {
+    /// Runs.
+    pub runs: usize,
+    /// Solvable scenarios.
+    pub solvable: usize,
+    /// Reached.
+    pub reached: usize,
+    /// Collisions.
+    pub collisions: usize,
+    /// Reported unreachable.
+    pub unreachable: usize,
+    /// Unsolvable scenarios reported unreachable.
+    pub unreachable_correct: usize,
+    /// Timeouts.
+    pub timeouts: usize,
+    /// Mean path ratio over reached runs with a reference.
+    pub mean_ratio: Option<f64>,
+    /// Reached runs within 1.25× the reference.
+    pub within_125: usize,
+}
+
+/// Sum up.
+pub fn totals(rows: &[Row]) -> Totals {
+    let ratios: Vec<f64> = rows.iter().filter_map(Row::ratio).collect();
+    Totals {
+        runs: rows.len(),
+        solvable: rows.iter().filter(|r| r.solvable).count(),
+        reached: rows
+            .iter()
+            .filter(|r| r.outcome == Outcome::Reached)
+            .count(),
+        collisions: rows
+            .iter()
+            .filter(|r| r.outcome == Outcome::Collision)
+            .count(),
+        unreachable: rows
+            .iter()
+            .filter(|r| r.outcome == Outcome::Unreachable)
+            .count(),
+        unreachable_correct: rows
+            .iter()
+            .filter(|r| !r.solvable && r.outcome == Outcome::Unreachable)
+            .count(),
+        timeouts: rows
+            .iter()
+            .filter(|r| r.outcome == Outcome::Timeout)
+            .count(),
+        mean_ratio: (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64),
+        within_125: ratios.iter().filter(|&&r| r <= 1.25).count(),
+    }
+}
+
+/// The table: one row per scenario (unless `summary_only`), then totals.
+pub fn table(rows: &[Row], summary_only: bool) -> String {
+    let mut s = String::new();
+    if !summary_only {
+        let _ = writeln!(
+            s,
+            "| scenario | planner | outcome | steps | path m | ref m | ratio | min clear m | VOs |"
+        );
+        let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+        for r in rows {
+            let _ = writeln!(
+                s,
+                "| {} | {} | {}{} | {} | {:.2} | {} | {} | {:.3} | {} |",
+                r.name,
+                r.planner,
+                r.outcome.as_str(),
+                if r.correct() { "" } else { " ✗" },
+                r.steps,
+                r.path_length,
+                r.reference_length
+                    .map(|l| format!("{l:.2}"))
+                    .unwrap_or_else(|| "–".into()),
+                r.ratio()
+                    .map(|l| format!("{l:.2}"))
+                    .unwrap_or_else(|| "–".into()),
+                r.min_clearance,
+                r.virtual_obstacles
+            );
+        }
+        s.push('\n');
+    }
+    let t = totals(rows);
+    let pct = |n: usize, d: usize| {
+        if d == 0 {
+            0.0
+        } else {
+            100.0 * n as f64 / d as f64
+        }
+    };
+    let _ = writeln!(
+        s,
+        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}",
+        t.runs,
+        t.reached,
+        t.solvable,
+        pct(t.reached, t.solvable),
+        t.collisions,
+        t.unreachable,
+        t.unreachable_correct,
+        t.runs - t.solvable,
+        t.timeouts,
+        t.mean_ratio.map(|r| format!("{r:.3}")).unwrap_or_else(|| "–".into()),
+        t.within_125,
+        t.reached
+    );
+    s
+}

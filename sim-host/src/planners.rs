@@ -1,0 +1,149 @@
+//! The planners the simulator can drive. All planner logic lives in
+//! planner-core; this module only converts units (metres and radians to the
+//! core's millimetres and binary angles) and back.
+
+use crate::geom::V2;
+use crate::scenario::Scenario;
+use planner_core::fixed::Point;
+use planner_core::{
+    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Pose, RawCounts, Status,
+};
+
+/// Planner names for `--planner`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum, serde::Serialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum PlannerKind {
+    /// The product: EAPF plus virtual-obstacle escape.
+    Eapf,
+    /// EAPF as the paper describes it, without the escape.
+    EapfPlain,
+}
+
+impl PlannerKind {
+    /// The `--planner` name.
+    pub fn name(self) -> &'static str {
+        match self {
+            PlannerKind::Eapf => "eapf",
+            PlannerKind::EapfPlain => "eapf-plain",
+        }
+    }
+}
+
+/// A command in simulator units.
+#[derive(Clone, Copy, Debug)]
+pub struct SimCommand {
+    /// World heading, rad.
+    pub heading: f64,
+    /// Step, m.
+    pub step_m: f64,
+    /// The core's status.
+    pub status: Status,
+}
+
+/// Metres to the core's millimetres.
+pub fn to_point(p: V2) -> Point {
+    Point::saturating((p.x * 1000.0).round() as i32, (p.y * 1000.0).round() as i32)
+}
+
+/// The core's millimetres to metres.
+pub fn to_v2(p: Point) -> V2 {
+    V2::new(p.x as f64 / 1000.0, p.y as f64 / 1000.0)
+}
+
+/// Radians to the core's binary angle.
+pub fn to_angle(rad: f64) -> Angle {
+    let turns = rad / std::f64::consts::TAU;
+    Angle(((turns.rem_euclid(1.0) * 65_536.0).round() as u32 & 0xFFFF) as u16)
+}
+
+/// The core's binary angle to radians in (−π, π].
+pub fn to_rad(a: Angle) -> f64 {
+    a.signed() as f64 * std::f64::consts::TAU / 65_536.0
+}
+
+/// What a run leaves to draw: remembered points, the midpoint of the
+/// active ones, virtual obstacles (centre, radius), virtual obstacles dropped.
+pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
+
+/// A planner under simulation.
+pub struct SimPlanner {
+    core: Planner,
+}
+
+impl SimPlanner {
+    /// The planner `kind` for scenario `sc`, sensors on an `adc`.
+    pub fn new(kind: PlannerKind, sc: &Scenario, adc: AdcProfile) -> SimPlanner {
+        let escape = EscapeConfig {
+            enabled: kind == PlannerKind::Eapf,
+            ..EscapeConfig::default()
+        };
+        let radius_mm = (sc.robot_radius * 1000.0).round().clamp(20.0, 1000.0) as u16;
+        let cfg = ConfigBuilder::new(adc)
+            .robot_radius_mm(radius_mm)
+            .escape(escape)
+            .build()
+            .expect("the default configuration with a validated scenario radius is valid");
+        let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
+        SimPlanner {
+            core: Planner::new(cfg, goal),
+        }
+    }
+
+    /// Sensor angles, rad.
+    pub fn sensor_angles_rad(&self) -> [f64; 5] {
+        self.core.config().sensor_angles().map(to_rad)
+    }
+
+    /// Sensor face offset from the centre, m.
+    pub fn sensor_offset_m(&self) -> f64 {
+        self.core.config().sensor_offset_mm() as f64 / 1000.0
+    }
+
+    /// One cycle with odometry pose (`p`, `heading`) and raw counts.
+    pub fn step(&mut self, p: V2, heading: f64, raw: &RawCounts) -> SimCommand {
+        let pose = Pose {
+            position: to_point(p),
+            heading: to_angle(heading),
+        };
+        let out = self.core.step_raw(pose, raw);
+        SimCommand {
+            heading: to_rad(out.command.heading),
+            step_m: out.command.step_mm as f64 / 1000.0,
+            status: out.status,
+        }
+    }
+
+    /// The guard: may the advance go on for `remaining_m`?
+    pub fn guard(&self, raw: &RawCounts, remaining_m: f64) -> bool {
+        let mm = (remaining_m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16;
+        self.core.guard_raw(raw, mm) == planner_core::Guard::Continue
+    }
+
+    /// Collision points of the last cycle, m.
+    pub fn last_collision_points(&self) -> Vec<V2> {
+        self.core
+            .last_collision_points()
+            .iter()
+            .map(|&p| to_v2(p))
+            .collect()
+    }
+
+    /// (remembered points, midpoint of the active ones with the robot at
+    /// `robot`, virtual obstacles, virtual obstacles dropped in all).
+    pub fn diagnostics(&self, robot: V2) -> Diagnostics {
+        let rem = self.core.memory().iter().map(|r| to_v2(r.point)).collect();
+        let mid = self
+            .core
+            .memory()
+            .midpoint(to_point(robot), self.core.goal())
+            .map(to_v2);
+        let vr = self.core.config().escape().radius_mm as f64 / 1000.0;
+        let vos = self
+            .core
+            .escape()
+            .obstacles()
+            .map(|&p| (to_v2(p), vr))
+            .collect();
+        (rem, mid, vos, self.core.escape().dropped() as usize)
+    }
+}

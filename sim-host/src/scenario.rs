@@ -1,0 +1,349 @@
+//! Scenario files, format 1 (`../shared/scenarios/FORMAT.md`): one world, one
+//! start, one goal, in TOML. Unknown keys are errors, and every rule broken
+//! is reported with the file, the key and the rule.
+
+use serde::Deserialize;
+use std::fmt;
+use std::path::{Path, PathBuf};
+
+/// A circle obstacle.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CircleSpec {
+    /// Centre, m.
+    pub center: [f64; 2],
+    /// Radius, m.
+    pub radius: f64,
+}
+
+/// A simple polygon obstacle, either winding.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PolygonSpec {
+    /// Vertices, m.
+    pub points: Vec<[f64; 2]>,
+}
+
+/// A circle moving back and forth between waypoints at constant speed.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct MovingSpec {
+    /// Centre at time zero, m.
+    pub center: [f64; 2],
+    /// Radius, m.
+    pub radius: f64,
+    /// Waypoints, m.
+    pub waypoints: Vec<[f64; 2]>,
+    /// Speed, m/s.
+    pub speed: f64,
+}
+
+/// A scenario as written in the file.
+#[derive(Clone, Debug, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct Scenario {
+    /// Always 1.
+    pub format: i64,
+    /// Unique short name.
+    pub name: String,
+    /// Free text.
+    #[serde(default)]
+    pub description: Option<String>,
+    /// xmin, ymin, xmax, ymax, m; the boundary is a wall.
+    pub bounds: [f64; 4],
+    /// Start, m.
+    pub start: [f64; 2],
+    /// Start heading, degrees; default: facing the goal.
+    #[serde(default)]
+    pub start_heading: Option<f64>,
+    /// Goal, m.
+    pub goal: [f64; 2],
+    /// Robot radius, m (default 0.10).
+    #[serde(default = "default_radius")]
+    pub robot_radius: f64,
+    /// Whether a collision-free path exists (default true).
+    #[serde(default = "default_true")]
+    pub solvable: bool,
+    /// Circles.
+    #[serde(default)]
+    pub circle: Vec<CircleSpec>,
+    /// Polygons.
+    #[serde(default)]
+    pub polygon: Vec<PolygonSpec>,
+    /// Moving circles.
+    #[serde(default)]
+    pub moving: Vec<MovingSpec>,
+}
+
+fn default_radius() -> f64 {
+    0.10
+}
+fn default_true() -> bool {
+    true
+}
+
+/// A rejected scenario file: which file, which key, which rule.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ScenarioError {
+    /// The file.
+    pub file: PathBuf,
+    /// The key (dotted path, e.g. `circle[2].radius`), or `-` for the file.
+    pub key: String,
+    /// The rule broken.
+    pub rule: String,
+}
+
+impl fmt::Display for ScenarioError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{}: key `{}`: {}",
+            self.file.display(),
+            self.key,
+            self.rule
+        )
+    }
+}
+
+impl std::error::Error for ScenarioError {}
+
+impl Scenario {
+    /// Read and validate a file.
+    pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
+        let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
+            file: path.to_path_buf(),
+            key: "-".into(),
+            rule: format!("cannot read the file: {e}"),
+        })?;
+        Scenario::parse(&text, path)
+    }
+
+    /// Parse and validate text; `path` names it in errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Scenario, ScenarioError> {
+        let err = |key: &str, rule: String| ScenarioError {
+            file: path.to_path_buf(),
+            key: key.to_string(),
+            rule,
+        };
+        let sc: Scenario = toml::from_str(text).map_err(|e| {
+            let msg = e.message().to_string();
+            // toml names unknown and missing fields in its message; pull the key out.
+            let key = msg
+                .split('`')
+                .nth(1)
+                .map(str::to_string)
+                .unwrap_or_else(|| "-".to_string());
+            err(&key, format!("not valid format 1 TOML: {}", msg.trim()))
+        })?;
+        sc.validate().map_err(|(k, r)| err(&k, r))?;
+        Ok(sc)
+    }
+
+    /// The rules of FORMAT.md, as (key, rule) on failure.
+    fn validate(&self) -> Result<(), (String, String)> {
+        let fail = |k: &str, r: &str| Err((k.to_string(), r.to_string()));
+        if self.format != 1 {
+            return fail("format", "must be 1");
+        }
+        if self.name.trim().is_empty() {
+            return fail("name", "must not be empty");
+        }
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        let [x0, y0, x1, y1] = self.bounds;
+        if !finite(&self.bounds) || x1 <= x0 || y1 <= y0 {
+            return fail("bounds", "must be finite with xmin < xmax and ymin < ymax");
+        }
+        if !(self.robot_radius.is_finite() && self.robot_radius > 0.0 && self.robot_radius < 1.0) {
+            return fail("robot_radius", "must be in (0, 1) m");
+        }
+        if let Some(h) = self.start_heading {
+            if !h.is_finite() {
+                return fail("start_heading", "must be a finite number of degrees");
+            }
+        }
+        for (k, c) in self.circle.iter().enumerate() {
+            if !finite(&c.center) {
+                return fail(&format!("circle[{k}].center"), "must be finite");
+            }
+            if !(c.radius.is_finite() && c.radius > 0.0) {
+                return fail(&format!("circle[{k}].radius"), "must be positive");
+            }
+        }
+        for (k, p) in self.polygon.iter().enumerate() {
+            if p.points.len() < 3 {
+                return fail(&format!("polygon[{k}].points"), "needs at least 3 points");
+            }
+            if !p.points.iter().all(|q| finite(q)) {
+                return fail(&format!("polygon[{k}].points"), "must be finite");
+            }
+            if polygon_area(&p.points).abs() < 1e-12 {
+                return fail(&format!("polygon[{k}].points"), "has no area");
+            }
+        }
+        for (k, m) in self.moving.iter().enumerate() {
+            if !(m.radius.is_finite() && m.radius > 0.0) {
+                return fail(&format!("moving[{k}].radius"), "must be positive");
+            }
+            if !(m.speed.is_finite() && m.speed >= 0.0) {
+                return fail(&format!("moving[{k}].speed"), "must be zero or positive");
+            }
+            if m.waypoints.is_empty() || !m.waypoints.iter().all(|q| finite(q)) {
+                return fail(
+                    &format!("moving[{k}].waypoints"),
+                    "needs at least one finite point",
+                );
+            }
+            if !finite(&m.center) {
+                return fail(&format!("moving[{k}].center"), "must be finite");
+            }
+        }
+        let inside = |p: [f64; 2]| p[0] > x0 && p[0] < x1 && p[1] > y0 && p[1] < y1;
+        for (key, p) in [("start", self.start), ("goal", self.goal)] {
+            if !finite(&p) || !inside(p) {
+                return fail(key, "must lie inside bounds");
+            }
+            let world = crate::world::World::from_scenario(self);
+            let clear = world.clearance(glam(p), 0.0);
+            if clear < self.robot_radius - 1e-9 {
+                return fail(
+                    key,
+                    &format!(
+                        "must be at least robot_radius ({}) from every obstacle at time zero (it is {:.4} m)",
+                        self.robot_radius,
+                        clear.max(0.0)
+                    ),
+                );
+            }
+        }
+        Ok(())
+    }
+
+    /// Start heading in radians (default: facing the goal).
+    pub fn start_heading_rad(&self) -> f64 {
+        match self.start_heading {
+            Some(d) => d.to_radians(),
+            None => (self.goal[1] - self.start[1]).atan2(self.goal[0] - self.start[0]),
+        }
+    }
+}
+
+fn glam(p: [f64; 2]) -> crate::geom::V2 {
+    crate::geom::V2::new(p[0], p[1])
+}
+
+/// Signed area (shoelace).
+pub fn polygon_area(pts: &[[f64; 2]]) -> f64 {
+    let n = pts.len();
+    (0..n)
+        .map(|i| {
+            let (a, b) = (pts[i], pts[(i + 1) % n]);
+            a[0] * b[1] - b[0] * a[1]
+        })
+        .sum::<f64>()
+        / 2.0
+}
+
+/// Every `.toml` scenario under the given files or folders, sorted by path.
+pub fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>, String> {
+    let mut out = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            walk(p, &mut out).map_err(|e| format!("{}: {e}", p.display()))?;
+        } else if p.is_file() {
+            out.push(p.clone());
+        } else {
+            return Err(format!("{}: no such file or folder", p.display()));
+        }
+    }
+    out.sort();
+    out.dedup();
+    Ok(out)
+}
+
+fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
+    for e in std::fs::read_dir(dir)? {
+        let p = e?.path();
+        if p.is_dir() {
+            walk(&p, out)?;
+        } else if p.extension().is_some_and(|x| x == "toml") {
+            out.push(p);
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const OK: &str = r#"
+format = 1
+name = "t"
+bounds = [0.0, 0.0, 6.0, 5.0]
+start = [0.5, 2.5]
+goal = [5.5, 2.5]
+[[circle]]
+center = [3.0, 2.5]
+radius = 0.5
+"#;
+
+    fn parse(s: &str) -> Result<Scenario, ScenarioError> {
+        Scenario::parse(s, Path::new("t.toml"))
+    }
+
+    #[test]
+    fn defaults() {
+        let s = parse(OK).unwrap();
+        assert_eq!(s.robot_radius, 0.10);
+        assert!(s.solvable);
+        assert!((s.start_heading_rad() - 0.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn unknown_key_names_the_key() {
+        let e = parse(&OK.replace("radius = 0.5", "radius = 0.5\nradios = 1")).unwrap_err();
+        assert_eq!(e.key, "radios");
+        assert!(e.to_string().contains("t.toml"), "{e}");
+    }
+
+    #[test]
+    fn rules_name_key_and_rule() {
+        let cases = [
+            (OK.replace("format = 1", "format = 2"), "format"),
+            (
+                OK.replace("[0.0, 0.0, 6.0, 5.0]", "[6.0, 0.0, 0.0, 5.0]"),
+                "bounds",
+            ),
+            (
+                OK.replace("start = [0.5, 2.5]", "start = [9.5, 2.5]"),
+                "start",
+            ),
+            (OK.replace("goal = [5.5, 2.5]", "goal = [3.3, 2.5]"), "goal"),
+            (
+                OK.replace("radius = 0.5", "radius = -1.0"),
+                "circle[0].radius",
+            ),
+            (OK.replace("name = \"t\"", "name = \"\""), "name"),
+            (
+                format!("{OK}\n[[polygon]]\npoints = [[1.0, 1.0], [2.0, 2.0]]\n"),
+                "polygon[0].points",
+            ),
+            (OK.replace("goal = [5.5, 2.5]", ""), "goal"),
+        ];
+        for (text, key) in cases {
+            let e = parse(&text).unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+            assert!(!e.rule.is_empty());
+        }
+    }
+
+    #[test]
+    fn every_shared_scenario_loads() {
+        let shared = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../shared/scenarios");
+        let files = collect(&[shared]).unwrap();
+        assert!(files.len() >= 600, "found {}", files.len());
+        for f in files {
+            Scenario::load(&f).unwrap_or_else(|e| panic!("{e}"));
+        }
+    }
+}

@@ -1,0 +1,284 @@
+//! The simulated rover: a differential drive that executes the core's
+//! command as a turn in place then an advance, calls the core's guard
+//! during the advance, checks every motion exactly against the world, and
+//! feeds the planner odometry (exact, or with seeded slip).
+
+use crate::geom::V2;
+use crate::planners::{PlannerKind, SimPlanner};
+use crate::scenario::Scenario;
+use crate::sensor::{SensorMode, VirtualSensors};
+use crate::world::World;
+use planner_core::{AdcProfile, Status};
+use rand::SeedableRng;
+use rand_distr::{Distribution, Normal};
+use rand_pcg::Pcg64;
+use serde::Serialize;
+
+/// How a run ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Outcome {
+    /// Within the goal tolerance, no collision.
+    Reached,
+    /// The robot's disc touched an obstacle or wall.
+    Collision,
+    /// The planner reported the goal unreachable and stopped.
+    Unreachable,
+    /// The budget ran out.
+    Timeout,
+}
+
+impl Outcome {
+    /// Lower-case name.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Outcome::Reached => "reached",
+            Outcome::Collision => "collision",
+            Outcome::Unreachable => "unreachable",
+            Outcome::Timeout => "timeout",
+        }
+    }
+}
+
+/// Simulation settings.
+#[derive(Clone, Debug)]
+pub struct SimConfig {
+    /// Which planner drives.
+    pub planner: PlannerKind,
+    /// Seed for sensor noise and odometry slip.
+    pub seed: u64,
+    /// Sensor model.
+    pub sensors: SensorMode,
+    /// ADC of the emulated board.
+    pub adc: AdcProfile,
+    /// Forward speed, m/s.
+    pub speed: f64,
+    /// Turn rate, rad/s.
+    pub turn_rate: f64,
+    /// Odometry slip: (distance σ as a fraction, heading σ per radian turned).
+    pub slip: Option<(f64, f64)>,
+    /// Budget: planner cycles.
+    pub max_steps: usize,
+    /// Budget: driven length as a multiple of the reference plus 5 m (three
+    /// times that multiple of the straight line plus 10 m without one).
+    pub max_length_ratio: f64,
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        SimConfig {
+            planner: PlannerKind::Eapf,
+            seed: 1,
+            sensors: SensorMode::REALISTIC,
+            adc: AdcProfile::AVR_10BIT_5V,
+            speed: 0.25,
+            turn_rate: 2.0,
+            slip: None,
+            max_steps: 3_000,
+            max_length_ratio: 8.0,
+        }
+    }
+}
+
+/// One row of the driven path.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct TraceRow {
+    /// Time, s.
+    pub t: f64,
+    /// x, m.
+    pub x: f64,
+    /// y, m.
+    pub y: f64,
+    /// Heading, rad.
+    pub heading: f64,
+}
+
+/// Everything a run produced.
+#[derive(Clone, Debug)]
+pub struct RunResult {
+    /// How it ended.
+    pub outcome: Outcome,
+    /// Planner cycles.
+    pub steps: usize,
+    /// Driven length, m.
+    pub path_length: f64,
+    /// Smallest clearance between the robot's disc and any obstacle, m.
+    pub min_clearance: f64,
+    /// The true driven path, rows at most 1 cm apart.
+    pub trace: Vec<TraceRow>,
+    /// Collision points the planner saw (world, m).
+    pub seen: Vec<V2>,
+    /// Remembered points at the end (world, m).
+    pub remembered: Vec<V2>,
+    /// Midpoint of the active remembered points at the end.
+    pub midpoint: Option<V2>,
+    /// Virtual obstacles at the end (centre, radius), m.
+    pub virtual_obstacles: Vec<(V2, f64)>,
+    /// Total virtual obstacles dropped.
+    pub virtual_dropped: usize,
+    /// Cycles whose status was a sensor fault.
+    pub sensor_faults: usize,
+}
+
+fn wrap(a: f64) -> f64 {
+    let t = std::f64::consts::TAU;
+    (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI
+}
+
+/// Run one scenario.
+pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult {
+    let world = World::from_scenario(sc);
+    let r = sc.robot_radius;
+    let goal = V2::new(sc.goal[0], sc.goal[1]);
+    let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc);
+    let angles = planner.sensor_angles_rad();
+    let mut sensors = VirtualSensors::new(
+        cfg.adc,
+        cfg.sensors,
+        angles,
+        planner.sensor_offset_m(),
+        cfg.seed,
+    );
+    let mut rng = Pcg64::seed_from_u64(cfg.seed ^ 0x05ee_d0d0);
+    let unit = Normal::new(0.0, 1.0).expect("unit normal");
+
+    let mut p = V2::new(sc.start[0], sc.start[1]);
+    let mut heading = sc.start_heading_rad();
+    // Odometry: what the planner believes.
+    let (mut op, mut oh) = (p, heading);
+    let mut t = 0.0;
+    let mut trace = vec![TraceRow {
+        t,
+        x: p.x,
+        y: p.y,
+        heading,
+    }];
+    let mut length = 0.0;
+    let mut min_clear = world.clearance(p, 0.0) - r;
+    let straight = p.dist(goal);
+    // Without a reference (unsolvable, or no grid path) the planner must
+    // give up by itself: allow it a longer drive to do so.
+    let budget = match reference {
+        Some(l) => cfg.max_length_ratio * l + 5.0,
+        None => 3.0 * cfg.max_length_ratio * straight + 10.0,
+    };
+    let mut seen: Vec<V2> = Vec::new();
+    let mut faults = 0;
+    let mut outcome = Outcome::Timeout;
+    let mut steps = 0;
+    let debug = std::env::var_os("SIM_DEBUG").is_some();
+
+    'run: while steps < cfg.max_steps {
+        steps += 1;
+        let raw = sensors.read(&world, p, heading, t);
+        let out = planner.step(op, oh, &raw);
+        if debug {
+            eprintln!(
+                "step {steps:4} t {t:7.2} pos ({:.3},{:.3}) hd {:6.1} raw {:?} -> hd {:6.1} step {:.3} {:?}",
+                p.x, p.y, heading.to_degrees(), raw, out.heading.to_degrees(), out.step_m, out.status
+            );
+        }
+        for q in planner.last_collision_points() {
+            if seen.iter().all(|s| s.dist(q) > 0.03) {
+                seen.push(q);
+            }
+        }
+        match out.status {
+            Status::Arrived => {
+                outcome = Outcome::Reached;
+                break;
+            }
+            Status::Unreachable => {
+                outcome = Outcome::Unreachable;
+                break;
+            }
+            Status::SensorFault => {
+                faults += 1;
+                t += 0.04; // wait for the next sensor value
+                continue;
+            }
+            Status::Moving => {}
+        }
+        // Turn in place (a disc turning in place sweeps nothing new).
+        let dturn = wrap(out.heading - oh);
+        t += dturn.abs() / cfg.turn_rate;
+        let mut true_turn = dturn;
+        if let Some((_, hs)) = cfg.slip {
+            true_turn += unit.sample(&mut rng) * hs * dturn.abs();
+        }
+        heading = wrap(heading + true_turn);
+        oh = out.heading;
+        if dturn != 0.0 {
+            trace.push(TraceRow {
+                t,
+                x: p.x,
+                y: p.y,
+                heading,
+            });
+        }
+        // Advance in pieces of at most 1 cm, calling the guard each piece.
+        let step = out.step_m;
+        let mut done = 0.0;
+        while done < step - 1e-9 {
+            let piece = (step - done).min(0.01);
+            let mut true_piece = piece;
+            if let Some((ds, _)) = cfg.slip {
+                true_piece *= 1.0 + unit.sample(&mut rng) * ds;
+            }
+            let q = p + V2::from_angle(heading) * true_piece;
+            let t1 = t + piece / cfg.speed;
+            let c = world
+                .static_sweep_clearance(p, q)
+                .min(world.moving_sweep_clearance(p, q, t, t1));
+            min_clear = min_clear.min(c - r);
+            length += true_piece;
+            p = q;
+            t = t1;
+            op = op + V2::from_angle(oh) * piece;
+            done += piece;
+            trace.push(TraceRow {
+                t,
+                x: p.x,
+                y: p.y,
+                heading,
+            });
+            if c <= r {
+                outcome = Outcome::Collision;
+                break 'run;
+            }
+            if length > budget {
+                break 'run;
+            }
+            let raw = sensors.read(&world, p, heading, t);
+            if !planner.guard(&raw, step - done) {
+                break;
+            }
+        }
+    }
+    let (remembered, midpoint, virtual_obstacles, virtual_dropped) = planner.diagnostics(op);
+    RunResult {
+        outcome,
+        steps,
+        path_length: length,
+        min_clearance: min_clear,
+        trace,
+        seen,
+        remembered,
+        midpoint,
+        virtual_obstacles,
+        virtual_dropped,
+        sensor_faults: faults,
+    }
+}
+
+/// The trace as CSV: `t,x,y,heading` (s, m, m, rad).
+pub fn trace_csv(rows: &[TraceRow]) -> String {
+    let mut s = String::from("t,x,y,heading\n");
+    for r in rows {
+        s.push_str(&format!(
+            "{:.4},{:.5},{:.5},{:.5}\n",
+            r.t, r.x, r.y, r.heading
+        ));
+    }
+    s
+}

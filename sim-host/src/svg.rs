@@ -1,0 +1,207 @@
+//! A picture of one run: obstacles, the reference path, the driven path,
+//! start and goal, the collision points the planner saw, the remembered
+//! points and their midpoint, and the virtual obstacles.
+
+use crate::geom::V2;
+use crate::scenario::Scenario;
+use crate::sim::RunResult;
+use std::fmt::Write;
+
+/// The SVG document for a run.
+pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&[V2]>) -> String {
+    let [x0, y0, x1, y1] = sc.bounds;
+    let (w, h) = (x1 - x0, y1 - y0);
+    let scale = 900.0 / w.max(h);
+    let (pw, ph) = (w * scale, h * scale);
+    let legend_h = 86.0;
+    let px = |p: V2| ((p.x - x0) * scale, (y1 - p.y) * scale + legend_h);
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="0 0 {pw:.1} {:.1}" font-family="sans-serif">"#,
+        pw,
+        ph + legend_h,
+        ph + legend_h
+    );
+    let _ = writeln!(
+        s,
+        r##"<rect x="0" y="0" width="{pw:.1}" height="{:.1}" fill="#fff"/>"##,
+        ph + legend_h
+    );
+    let _ = writeln!(
+        s,
+        r##"<rect x="0" y="{legend_h}" width="{pw:.1}" height="{ph:.1}" fill="#fbfaf7" stroke="#333" stroke-width="3"/>"##
+    );
+    // Title and figures.
+    let colour = match run.outcome.as_str() {
+        "reached" => "#1a7f37",
+        "collision" => "#cf222e",
+        "unreachable" => "#9a6700",
+        _ => "#6e7781",
+    };
+    let _ = writeln!(
+        s,
+        r##"<text x="10" y="24" font-size="18" font-weight="bold">{} — {planner}: <tspan fill="{colour}">{}</tspan></text>"##,
+        xml(&sc.name),
+        run.outcome.as_str()
+    );
+    let ratio = reference
+        .map(|r| {
+            let l: f64 = r.windows(2).map(|w| w[0].dist(w[1])).sum();
+            format!(", {:.2}× the reference {:.2} m", run.path_length / l, l)
+        })
+        .unwrap_or_default();
+    let _ = writeln!(
+        s,
+        r##"<text x="10" y="48" font-size="13" fill="#444">{} steps, path {:.2} m{ratio}, min clearance {:.3} m, {} virtual obstacles</text>"##,
+        run.steps, run.path_length, run.min_clearance, run.virtual_dropped
+    );
+    // Obstacles.
+    for c in &sc.circle {
+        let (cx, cy) = px(V2::new(c.center[0], c.center[1]));
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="#8c959f" stroke="#57606a"/>"##,
+            c.radius * scale
+        );
+    }
+    for p in &sc.polygon {
+        let pts: Vec<String> = p
+            .points
+            .iter()
+            .map(|q| {
+                let (a, b) = px(V2::new(q[0], q[1]));
+                format!("{a:.1},{b:.1}")
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            r##"<polygon points="{}" fill="#8c959f" stroke="#57606a" stroke-width="0.5"/>"##,
+            pts.join(" ")
+        );
+    }
+    for m in &sc.moving {
+        let (cx, cy) = px(V2::new(m.center[0], m.center[1]));
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="none" stroke="#57606a" stroke-dasharray="4 3"/>"##,
+            m.radius * scale
+        );
+    }
+    // Virtual obstacles.
+    for (c, r) in &run.virtual_obstacles {
+        let (cx, cy) = px(*c);
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="#54aeff" fill-opacity="0.25" stroke="#0969da" stroke-dasharray="3 2"/>"##,
+            r * scale
+        );
+    }
+    // Reference path.
+    if let Some(r) = reference {
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#2da44e" stroke-width="2" stroke-dasharray="6 4" opacity="0.8"/>"##,
+            poly(r, &px)
+        );
+    }
+    // Driven path, with the robot's width as a faint band.
+    let path: Vec<V2> = run.trace.iter().map(|t| V2::new(t.x, t.y)).collect();
+    let _ = writeln!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#0969da" stroke-width="{:.1}" stroke-linejoin="round" opacity="0.12"/>"##,
+        poly(&path, &px),
+        2.0 * sc.robot_radius * scale
+    );
+    let _ = writeln!(
+        s,
+        r##"<polyline points="{}" fill="none" stroke="#0550ae" stroke-width="2" stroke-linejoin="round"/>"##,
+        poly(&path, &px)
+    );
+    // What the planner saw and remembered.
+    for q in &run.seen {
+        let (a, b) = px(*q);
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{a:.1}" cy="{b:.1}" r="2.5" fill="#fb8500"/>"##
+        );
+    }
+    for q in &run.remembered {
+        let (a, b) = px(*q);
+        let _ = writeln!(
+            s,
+            r##"<path d="M{:.1},{:.1} l8,8 m0,-8 l-8,8" stroke="#8250df" stroke-width="2"/>"##,
+            a - 4.0,
+            b - 4.0
+        );
+    }
+    if let Some(m) = run.midpoint {
+        let (a, b) = px(m);
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{a:.1}" cy="{b:.1}" r="9" fill="none" stroke="#8250df" stroke-width="2.5"/>"##
+        );
+    }
+    // Start, goal, final pose.
+    let (sx, sy) = px(V2::new(sc.start[0], sc.start[1]));
+    let (gx, gy) = px(V2::new(sc.goal[0], sc.goal[1]));
+    let _ = writeln!(
+        s,
+        r##"<circle cx="{sx:.1}" cy="{sy:.1}" r="{:.1}" fill="#2da44e" stroke="#116329" stroke-width="2"/>"##,
+        sc.robot_radius * scale
+    );
+    let _ = writeln!(
+        s,
+        r##"<circle cx="{gx:.1}" cy="{gy:.1}" r="{:.1}" fill="none" stroke="#cf222e" stroke-width="3"/><circle cx="{gx:.1}" cy="{gy:.1}" r="3" fill="#cf222e"/>"##,
+        sc.robot_radius * scale
+    );
+    if let Some(last) = run.trace.last() {
+        let (a, b) = px(V2::new(last.x, last.y));
+        let (hx, hy) = (
+            last.heading.cos() * sc.robot_radius * scale,
+            -last.heading.sin() * sc.robot_radius * scale,
+        );
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{a:.1}" cy="{b:.1}" r="{:.1}" fill="#0969da" fill-opacity="0.5" stroke="#0550ae"/><line x1="{a:.1}" y1="{b:.1}" x2="{:.1}" y2="{:.1}" stroke="#fff" stroke-width="2"/>"##,
+            sc.robot_radius * scale,
+            a + hx,
+            b + hy
+        );
+    }
+    // Legend.
+    let items = [
+        ("#0550ae", "driven path"),
+        ("#2da44e", "reference"),
+        ("#fb8500", "collision points seen"),
+        ("#8250df", "remembered / midpoint"),
+        ("#54aeff", "virtual obstacles"),
+    ];
+    let mut lx = pw - 10.0;
+    for (c, label) in items.iter().rev() {
+        lx -= 8.0 * label.len() as f64 + 22.0;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{lx:.1}" y="62" width="12" height="12" fill="{c}"/><text x="{:.1}" y="73" font-size="12">{label}</text>"##,
+            lx + 16.0
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+fn poly(pts: &[V2], px: &dyn Fn(V2) -> (f64, f64)) -> String {
+    pts.iter()
+        .map(|&p| {
+            let (a, b) = px(p);
+            format!("{a:.1},{b:.1}")
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+fn xml(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}

@@ -1,0 +1,71 @@
+//! The trap suite and the paper environments, end to end: every run is
+//! collision-free, the walled-in goal is never "reached", and the scenarios
+//! the product planner handles today are reached. The full table is in
+//! docs/bench.md (regenerate with the command there).
+
+use sim_host::bench::{run_all, totals};
+use sim_host::scenario::collect;
+use sim_host::sim::{Outcome, SimConfig};
+use std::path::PathBuf;
+
+fn library() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
+}
+
+#[test]
+fn trap_suite_outcomes() {
+    let files = collect(&[library()]).unwrap();
+    assert!(files.len() >= 13, "library has {} files", files.len());
+    let rows = run_all(&files, &SimConfig::default(), false).unwrap();
+    for r in &rows {
+        assert_ne!(r.outcome, Outcome::Collision, "{} collided", r.name);
+        assert!(
+            r.min_clearance > 0.0,
+            "{}: min clearance {}",
+            r.name,
+            r.min_clearance
+        );
+        if !r.solvable {
+            assert_ne!(
+                r.outcome,
+                Outcome::Reached,
+                "{} reached an unsolvable goal",
+                r.name
+            );
+        }
+    }
+    let reached = |name: &str| {
+        rows.iter()
+            .find(|r| r.name == name)
+            .map(|r| r.outcome == Outcome::Reached)
+            .unwrap_or(false)
+    };
+    for name in [
+        "env1-ex1",
+        "env1-ex2",
+        "env2-ex2",
+        "u-trap",
+        "two-obstacles",
+        "gnron",
+        "corridor",
+        "comb",
+        "rooms",
+    ] {
+        assert!(reached(name), "{name} not reached");
+    }
+    let t = totals(&rows);
+    assert_eq!(t.collisions, 0);
+    assert!(t.reached >= 9, "{t:?}");
+}
+
+#[test]
+fn bad_scenario_is_rejected_before_running() {
+    let dir = std::env::temp_dir().join(format!("sim-host-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let f = dir.join("bad.toml");
+    std::fs::write(&f, "format = 1\nname = \"b\"\nbounds = [0.0, 0.0, 1.0, 1.0]\nstart = [0.5, 0.5]\ngoal = [0.9, 0.5]\ncolour = 3\n").unwrap();
+    let e = run_all(std::slice::from_ref(&f), &SimConfig::default(), false).unwrap_err();
+    assert_eq!(e.key, "colour");
+    assert!(e.to_string().contains("bad.toml"));
+    std::fs::remove_dir_all(&dir).ok();
+}
