@@ -83,7 +83,7 @@ fn ensure_tools() {
         "rustup",
         &["component", "list", "--installed", "--toolchain", "stable"],
     );
-    for c in ["rustfmt", "clippy", "llvm-tools"] {
+    for c in ["rustfmt", "clippy"] {
         if !comps.contains(c) {
             run(
                 &dir,
@@ -103,7 +103,7 @@ fn ensure_tools() {
         );
         exit(1);
     }
-    for c in ["rust-src", "llvm-tools"] {
+    for c in ["rust-src"] {
         if !nightly.contains(c) {
             run(
                 &dir,
