@@ -148,14 +148,8 @@ impl Escape {
     }
 
     /// Account for one planner cycle with the rover at `robot`, `goal_mm`
-    /// from the goal, the goal bearing `bearing`.
-    pub fn observe(
-        &mut self,
-        cfg: &EscapeConfig,
-        robot: Point,
-        goal_mm: u16,
-        bearing: Angle,
-    ) -> Verdict {
+    /// from the goal.
+    pub fn observe(&mut self, cfg: &EscapeConfig, robot: Point, goal_mm: u16) -> Verdict {
         if !cfg.enabled {
             return Verdict::Continue;
         }
@@ -204,7 +198,6 @@ impl Escape {
             self.crumbs.clear();
         }
         self.drops_since_best = self.drops_since_best.saturating_add(1);
-        let _ = bearing;
         let v = robot;
         if self.obstacles.is_full() {
             self.obstacles.pop_front();
@@ -273,23 +266,17 @@ mod tests {
         let mut e = Escape::new();
         let p = Point::new(0, 0);
         // Cycles 1, 2: window not full yet.
-        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
-        assert_eq!(
-            e.observe(&cfg, Point::new(50, 0), 1_950, Angle::ZERO),
-            Verdict::Continue
-        );
+        assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, Point::new(50, 0), 1_950), Verdict::Continue);
         // Cycle 3: 100 mm net over the window < 150 mm → stuck.
-        assert_eq!(
-            e.observe(&cfg, Point::new(100, 0), 1_950, Angle::ZERO),
-            Verdict::Dropped
-        );
+        assert_eq!(e.observe(&cfg, Point::new(100, 0), 1_950), Verdict::Dropped);
         // The obstacle sits where the rover stands.
         assert_eq!(*e.obstacles().next().unwrap(), Point::new(100, 0));
-        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::Dropped);
+        assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Dropped);
         // Two drops without a new best distance: give up.
-        assert_eq!(e.observe(&cfg, p, 2_000, Angle::ZERO), Verdict::GiveUp);
+        assert_eq!(e.observe(&cfg, p, 2_000), Verdict::GiveUp);
         assert_eq!(e.dropped(), 2);
     }
 
@@ -313,19 +300,14 @@ mod tests {
         }
         let mut verdicts = heapless::Vec::<Verdict, 32>::new();
         for &p in pts.iter() {
-            verdicts
-                .push(e.observe(&cfg, p, 5_000, Angle::ZERO))
-                .unwrap();
+            verdicts.push(e.observe(&cfg, p, 5_000)).unwrap();
         }
         // No drop while going round; the return to the first crumb is a loop.
         assert!(
             verdicts[..23].iter().all(|&v| v == Verdict::Continue),
             "{verdicts:?}"
         );
-        assert_eq!(
-            e.observe(&cfg, Point::new(0, 0), 5_000, Angle::ZERO),
-            Verdict::Dropped
-        );
+        assert_eq!(e.observe(&cfg, Point::new(0, 0), 5_000), Verdict::Dropped);
     }
 
     #[test]
@@ -337,16 +319,16 @@ mod tests {
         };
         let mut e = Escape::new();
         let p = Point::new(0, 0);
-        e.observe(&cfg, p, 3_000, Angle::ZERO);
-        assert_eq!(e.observe(&cfg, p, 3_000, Angle::ZERO), Verdict::Dropped);
+        e.observe(&cfg, p, 3_000);
+        assert_eq!(e.observe(&cfg, p, 3_000), Verdict::Dropped);
         // 200 mm nearer than ever: budget restored.
-        e.observe(&cfg, p, 2_800, Angle::ZERO);
+        e.observe(&cfg, p, 2_800);
         assert_eq!(e.best_mm(), 2_800);
-        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Dropped);
+        assert_eq!(e.observe(&cfg, p, 2_800), Verdict::Dropped);
         // Each drop clears the window, so the next comes two cycles later.
-        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Continue);
-        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::Dropped);
-        assert_eq!(e.observe(&cfg, p, 2_800, Angle::ZERO), Verdict::GiveUp);
+        assert_eq!(e.observe(&cfg, p, 2_800), Verdict::Continue);
+        assert_eq!(e.observe(&cfg, p, 2_800), Verdict::Dropped);
+        assert_eq!(e.observe(&cfg, p, 2_800), Verdict::GiveUp);
     }
 
     #[test]
@@ -384,7 +366,7 @@ mod tests {
         };
         let mut e = Escape::new();
         for i in 0..(2 * (VIRTUAL_CAPACITY as i16 + 5)) {
-            e.observe(&cfg, Point::new(i, 0), 1_000, Angle::ZERO);
+            e.observe(&cfg, Point::new(i, 0), 1_000);
         }
         assert!(e.dropped() as usize > VIRTUAL_CAPACITY);
         assert_eq!(e.len(), VIRTUAL_CAPACITY);

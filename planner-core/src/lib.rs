@@ -158,11 +158,7 @@ impl Planner {
         }
         let (gx, gy) = robot.to(self.goal);
         let bearing = Angle::atan2(gy, gx);
-        if self
-            .escape
-            .observe(&self.config.escape, robot, goal_mm, bearing)
-            == Verdict::GiveUp
-        {
+        if self.escape.observe(&self.config.escape, robot, goal_mm) == Verdict::GiveUp {
             self.unreachable = true;
             return stop(Status::Unreachable);
         }

@@ -295,14 +295,6 @@ impl FloatPlanner {
         };
         let half = 40f64.to_radians();
         let mut rel = wrap(heading - h);
-        if std::env::var_os("FLOAT_DEBUG").is_some() {
-            eprintln!(
-                "F {f:?} pts {pts:?} rel {:.2} bearing {:.2} mem {}",
-                rel.to_degrees(),
-                bearing.to_degrees(),
-                self.memory.len()
-            );
-        }
         self.near(rel.abs().to_degrees(), 40.0);
         if !pts.is_empty() && rel.abs() > half {
             // Which edge: a force straight behind is a decision boundary.
@@ -399,21 +391,6 @@ fn cycle() -> impl Strategy<Value = ((i16, i16, u16), [u16; 5])> {
         (0i16..10_000, 0i16..10_000, any::<u16>()),
         prop::array::uniform5(prop_oneof![3 => 40u16..600, 1 => 0u16..1_100]),
     )
-}
-
-#[test]
-fn debug_case() {
-    if std::env::var_os("FLOAT_DEBUG").is_none() {
-        return;
-    }
-    let c = cfg();
-    let mut st = Stats::default();
-    compare(
-        &c,
-        (7543, 7032),
-        &[((9579, 9372, 6184), [486, 545, 49, 114, 95])],
-        &mut st,
-    );
 }
 
 #[test]

@@ -3,11 +3,9 @@
 //! core is deterministic and its only inputs are pose and raw counts. This is
 //! the host half of the bit-exactness check the firmware builds will share.
 
-use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, Output, Planner, Pose, RawCounts, ScriptedSensors,
-};
+use planner_core::{AdcProfile, ConfigBuilder, Output, Planner, Pose, RawCounts, ScriptedSensors};
 use sim_host::geom::V2;
-use sim_host::planners::{to_angle, to_point};
+use sim_host::planners::{to_angle, to_point, to_rad};
 use sim_host::scenario::Scenario;
 use sim_host::sensor::{SensorMode, VirtualSensors};
 use sim_host::world::World;
@@ -23,9 +21,7 @@ fn replayed_trace_gives_identical_commands() {
         .build()
         .unwrap();
     let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
-    let angles = cfg
-        .sensor_angles()
-        .map(|a: Angle| a.signed() as f64 * std::f64::consts::TAU / 65_536.0);
+    let angles = cfg.sensor_angles().map(to_rad);
     let mut sensors = VirtualSensors::new(
         AdcProfile::AVR_10BIT_5V,
         SensorMode::REALISTIC,
@@ -49,7 +45,7 @@ fn replayed_trace_gives_identical_commands() {
         frames.push(raw);
         poses.push(pose);
         outs.push(out);
-        h = out.command.heading.signed() as f64 * std::f64::consts::TAU / 65_536.0;
+        h = to_rad(out.command.heading);
         p = p + V2::from_angle(h) * (out.command.step_mm as f64 / 1000.0);
     }
     // Replay.
