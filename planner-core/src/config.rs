@@ -84,6 +84,20 @@ impl Config {
     pub fn calibration(&self, i: usize) -> Option<&Calibration> {
         self.calibration.get(i)
     }
+
+    /// Replace the calibration of sensor `i` (a table measured on the
+    /// rover's own sensor). It must be built for the same ADC profile.
+    pub fn set_calibration(&mut self, i: usize, cal: Calibration) -> Result<(), ConfigError> {
+        let slot = self
+            .calibration
+            .get_mut(i)
+            .ok_or(ConfigError::Calibration(i as u8, CalibrationError::BadAdc))?;
+        if cal.full_scale() != slot.full_scale() {
+            return Err(ConfigError::Calibration(i as u8, CalibrationError::BadAdc));
+        }
+        *slot = cal;
+        Ok(())
+    }
     /// Goal tolerance, mm.
     pub fn goal_tolerance_mm(&self) -> u16 {
         self.goal_tolerance_mm
@@ -116,7 +130,6 @@ pub struct ConfigBuilder {
     diagonal_tolerance_deg: i16,
     direct_tolerance_deg: i16,
     escape: crate::escape::EscapeConfig,
-    calibration: Option<[Calibration; SENSOR_COUNT]>,
 }
 
 impl ConfigBuilder {
@@ -154,7 +167,6 @@ impl ConfigBuilder {
             diagonal_tolerance_deg: 5,
             direct_tolerance_deg: 5,
             escape: crate::escape::EscapeConfig::default(),
-            calibration: None,
         }
     }
 
@@ -211,11 +223,6 @@ impl ConfigBuilder {
         self.escape = v;
         self
     }
-    /// Per-sensor calibration tables (default: the datasheet curve for all).
-    pub fn calibration(mut self, v: [Calibration; SENSOR_COUNT]) -> Self {
-        self.calibration = Some(v);
-        self
-    }
 
     /// Validate and build.
     pub fn build(self) -> Result<Config, ConfigError> {
@@ -255,14 +262,12 @@ impl ConfigBuilder {
         if !self.escape.is_valid() {
             return Err(ConfigError::Escape);
         }
-        let calibration = match self.calibration {
-            Some(c) => c,
-            None => {
-                let c =
-                    Calibration::gp2y0a21(self.adc).map_err(|e| ConfigError::Calibration(0, e))?;
-                [c.clone(), c.clone(), c.clone(), c.clone(), c]
-            }
-        };
+        // Every sensor starts on the datasheet curve; `Config::set_calibration`
+        // replaces one. (The builder holds no tables: on the AVR a builder,
+        // a config and a planner with five tables each would not fit in RAM
+        // at once.)
+        let c = Calibration::gp2y0a21(self.adc).map_err(|e| ConfigError::Calibration(0, e))?;
+        let calibration = [c.clone(), c.clone(), c.clone(), c.clone(), c];
         let angles = a.map(Angle::from_deg);
         let sensor_dirs = angles.map(|t| (t.cos(), t.sin()));
         debug_assert!(sensor_dirs.iter().all(|d| d.0.abs() <= TRIG_ONE));
@@ -293,6 +298,18 @@ mod tests {
 
     fn b() -> ConfigBuilder {
         ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+    }
+
+    #[test]
+    fn a_calibration_is_replaced_only_by_one_for_the_same_adc() {
+        let mut c = b().build().unwrap();
+        let mine =
+            Calibration::from_points(AdcProfile::AVR_10BIT_5V, &[(100, 800), (600, 100)]).unwrap();
+        c.set_calibration(4, mine.clone()).unwrap();
+        assert_eq!(c.calibration(4), Some(&mine));
+        let stm = Calibration::gp2y0a21(AdcProfile::STM32_12BIT_3V3).unwrap();
+        assert!(c.set_calibration(0, stm).is_err());
+        assert!(c.set_calibration(5, mine).is_err());
     }
 
     #[test]

@@ -30,7 +30,7 @@
 //! progress and the goal is reported unreachable (a walled-in goal never
 //! lets the best distance improve).
 
-use crate::fixed::{inverse_square_force, Angle, Force, Point, FORCE_ONE};
+use crate::fixed::{inverse_square_force, within, Angle, Force, Point, FORCE_ONE};
 use heapless::Deque;
 
 /// Most virtual obstacles kept.
@@ -172,18 +172,18 @@ impl Escape {
             && self
                 .recent
                 .front()
-                .is_some_and(|&p| p.distance_mm(robot) < cfg.stuck_mm);
+                .is_some_and(|&p| within(p, robot, cfg.stuck_mm));
         // Loop: back near an old breadcrumb.
         let n = self.crumbs.len();
         let looped = self
             .crumbs
             .iter()
             .take(n.saturating_sub(2))
-            .any(|c| c.distance_mm(robot) < cfg.revisit_mm);
+            .any(|&c| within(c, robot, cfg.revisit_mm));
         if self
             .crumbs
             .back()
-            .is_none_or(|c| c.distance_mm(robot) >= cfg.crumb_mm)
+            .is_none_or(|&c| !within(c, robot, cfg.crumb_mm))
         {
             if self.crumbs.is_full() {
                 self.crumbs.pop_front();

@@ -99,10 +99,13 @@ impl Angle {
         const A: i32 = 25_736; // π/2 in Q14
         const B: i32 = 10_512; // (π − 5/2) in Q14
         const C: i32 = 1_160; // (π/2 − 3/2) in Q14
-        let x2 = (s * s) >> 14;
-        let t = B - ((C * x2) >> 14);
-        let t = A - ((t * x2) >> 14);
-        (s * t + (1 << 13)) >> 14
+                              // Every operand fits in i16, so each product is a 16 × 16 → 32-bit
+                              // multiply (about 30 cycles on the AVR instead of 146).
+        let x = s as i16;
+        let x2 = (mul16(x, x) >> 14) as i16;
+        let t = (B - (mul16(C as i16, x2) >> 14)) as i16;
+        let t = (A - (mul16(t, x2) >> 14)) as i16;
+        (mul16(x, t) + (1 << 13)) >> 14
     }
 
     /// Cosine in Q14.
@@ -165,10 +168,36 @@ impl Angle {
 /// Largest magnitude [`Angle::scaled`] accepts (`2^17 − 1`).
 pub const MAX_SCALED: i32 = (1 << 17) - 1;
 
-/// `a · b` where `b` is Q14, rounded; `|a| < 2^17`, `|b| ≤ 2^14`.
+/// `a · b` where one of them is Q14, rounded; `|a · b| < 2^31`.
 #[inline]
 pub fn mul_q14(a: i32, b: i32) -> i32 {
-    (a * b + (1 << 13)) >> 14
+    // Most callers pass millimetres that fit in 16 bits: then the product
+    // is a 16 × 16 → 32-bit multiply, five times cheaper on the AVR. Same
+    // result either way.
+    match (i16::try_from(a), i16::try_from(b)) {
+        (Ok(a16), Ok(b16)) => (mul16(a16, b16) + (1 << 13)) >> 14,
+        _ => (a * b + (1 << 13)) >> 14,
+    }
+}
+
+/// `a · b` as 32 bits from 16-bit operands (the AVR's cheap multiply).
+#[inline]
+pub fn mul16(a: i16, b: i16) -> i32 {
+    a as i32 * b as i32
+}
+
+/// Whether `a` and `b` are less than `r_mm` apart: exactly
+/// `a.distance_mm(b) < r_mm`, by a bounding-box test and squared lengths
+/// (no square root).
+pub fn within(a: Point, b: Point, r_mm: u16) -> bool {
+    let (dx, dy) = a.to(b);
+    let r = r_mm as i32;
+    if dx.abs() >= r || dy.abs() >= r {
+        return false;
+    }
+    // |dx|, |dy| < r ≤ 65,535: squares as u32 (16 × 16 bits).
+    let (ux, uy) = (dx.unsigned_abs(), dy.unsigned_abs());
+    ux * ux + uy * uy < (r as u32) * (r as u32)
 }
 
 /// A point of the world in millimetres (world frame, x right, y up).
@@ -230,10 +259,12 @@ pub fn sat_u16(v: i32) -> u16 {
 pub fn isqrt(v: u32) -> u16 {
     let mut rem = v;
     let mut root: u32 = 0;
-    let mut bit: u32 = 1 << 30;
-    while bit > rem {
-        bit >>= 2;
-    }
+    // Start at the highest even power of two not above v.
+    let mut bit: u32 = if v == 0 {
+        0
+    } else {
+        1 << ((31 - v.leading_zeros()) & !1)
+    };
     while bit != 0 {
         if rem >= root + bit {
             rem -= root + bit;

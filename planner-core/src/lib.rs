@@ -26,7 +26,8 @@
 //! Modules, one per concept of the papers: [`fixed`] (the fixed-point
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
 //! points), [`escape`] (virtual obstacles), [`command`] (output and the
-//! safety rule), [`config`].
+//! safety rule), [`config`]; [`drive`] (odometry and the turn-then-advance
+//! executor the firmwares share).
 //!
 //! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
 //! `embedded-hal` 0.2 (feature `hal02`) for the ADC adapter, because 1.0 has
@@ -37,6 +38,7 @@
 
 pub mod command;
 pub mod config;
+pub mod drive;
 pub mod escape;
 pub mod fixed;
 pub mod forces;
@@ -99,7 +101,17 @@ impl Planner {
 
     /// A new goal: forgets the memory, virtual obstacles and status.
     pub fn set_goal(&mut self, goal: Point) {
-        *self = Planner::new(self.config.clone(), goal);
+        // Field by field, not `*self = Planner::new(..)`: that would put a
+        // second planner (and config) on the AVR's small stack.
+        self.goal = goal;
+        self.memory = memory::Memory::new();
+        self.escape = escape::Escape::new();
+        self.fold_back = sensors::FoldBackFilter::default();
+        self.following = false;
+        self.paper_step_mm = self.config.sensor_range_mm;
+        self.unreachable = false;
+        self.last_points.clear();
+        self.last_readings = [Reading::Clear; SENSOR_COUNT];
     }
 
     /// The goal.
@@ -199,13 +211,16 @@ impl Planner {
 
         // The paper's step: the sensor range when free, else the farthest
         // detection plus the robot's width.
-        let farthest = points
-            .iter()
-            .map(|p| p.distance_mm - cfg.sensor_offset_mm.min(p.distance_mm))
-            .max();
-        self.paper_step_mm = match farthest {
-            None => cfg.sensor_range_mm,
-            Some(d) => d.saturating_add(2 * cfg.robot_radius_mm),
+        // (A plain loop: `Iterator::max` over these u16s was miscompiled for
+        // avr-none, caught by the firmware's bit-exactness test.)
+        let mut farthest: u16 = 0;
+        for p in points.iter() {
+            farthest = farthest.max(p.distance_mm.saturating_sub(cfg.sensor_offset_mm));
+        }
+        self.paper_step_mm = if points.is_empty() {
+            cfg.sensor_range_mm
+        } else {
+            farthest.saturating_add(2 * cfg.robot_radius_mm)
         };
 
         // Safety (§5): never outside the sensed sector, never beyond what the

@@ -193,6 +193,11 @@ impl Calibration {
         }
     }
 
+    /// Largest count of the ADC the table was built for.
+    pub fn full_scale(&self) -> u16 {
+        self.full_scale
+    }
+
     /// Nearest distance the table trusts, mm.
     pub fn min_mm(&self) -> u16 {
         self.reading(self.near_count).range_mm().unwrap_or(0)

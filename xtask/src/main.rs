@@ -201,9 +201,47 @@ fn ci() {
         ],
         &[],
     );
+    for fw in ["firmware-avr", "firmware-stm32"] {
+        let manifest = format!("{fw}/Cargo.toml");
+        if dir.join(&manifest).exists() {
+            run(
+                &dir,
+                "cargo",
+                &["+stable", "fmt", "--check", "--manifest-path", &manifest],
+                &[],
+            );
+        }
+    }
+    run(
+        &dir.join("firmware-avr"),
+        "cargo",
+        &["clippy", "--release", "--", "-D", "warnings"],
+        &[],
+    );
+    // The host tests include the emulated firmware tests (they build the
+    // firmware themselves).
     run(&dir, "cargo", &["+stable", "test", "--workspace"], &[]);
     cross_builds();
     eprintln!("\nxtask ci: all checks passed");
+}
+
+/// Size and cycle figures of the AVR firmware, measured in simavr.
+fn avr_report() {
+    run(
+        &root(),
+        "cargo",
+        &[
+            "+stable",
+            "run",
+            "--quiet",
+            "--release",
+            "-p",
+            "rover-tests",
+            "--bin",
+            "avr-report",
+        ],
+        &[],
+    );
 }
 
 fn main() {
@@ -211,12 +249,14 @@ fn main() {
     match task.as_str() {
         "ci" => ci(),
         "cross" => cross_builds(),
+        "avr-report" => avr_report(),
         _ => {
-            eprintln!("usage: cargo xtask <ci|cross>");
+            eprintln!("usage: cargo xtask <ci|cross|avr-report>");
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
+            eprintln!("  avr-report  firmware-avr size and step cycles (simavr)");
             exit(2);
         }
     }

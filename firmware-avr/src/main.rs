@@ -1,0 +1,298 @@
+//! # firmware-avr
+//!
+//! The rover firmware for an ATmega328P (Arduino Uno class) at 16 MHz: five
+//! IR sensors sampled in the background, wheel-encoder odometry, the
+//! turn-then-advance executor and the EAPF planner of `planner-core`, a
+//! text protocol on the serial port, and a watchdog. Pin map in [`board`],
+//! protocol in [`protocol`].
+//!
+//! Board code is a thin register-level layer on `avr-device` (avr-hal is not
+//! on crates.io): one module per peripheral. Everything the rover decides is
+//! in `planner-core`, the same code the simulator and the STM32 run.
+//! `ufmt` formats the telemetry (core::fmt would cost several KB of flash).
+#![no_std]
+#![no_main]
+#![feature(abi_avr_interrupt)]
+
+mod adc;
+mod board;
+mod clock;
+mod encoders;
+mod motors;
+mod protocol;
+mod serial;
+mod stack;
+
+use core::sync::atomic::{compiler_fence, Ordering};
+use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use planner_core::{
+    AdcProfile, Angle, ConfigBuilder, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status,
+};
+use protocol::Request;
+use serial::Serial;
+use ufmt::uwriteln;
+
+/// Goal set at build time, `"x_mm y_mm"` (optional; `G` over serial otherwise).
+const BUILD_GOAL: Option<&str> = option_env!("ROVER_GOAL");
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    // Safe stop: driver to standby, both motors off; the watchdog resets.
+    avr_device::interrupt::disable();
+    let dp = board::steal();
+    dp.PORTD.portd().write(|w| unsafe { w.bits(0) });
+    dp.PORTB.portb().write(|w| unsafe { w.bits(0) });
+    loop {}
+}
+
+fn status_code(s: Status) -> u8 {
+    match s {
+        Status::Moving => 0,
+        Status::Arrived => 1,
+        Status::Unreachable => 2,
+        Status::SensorFault => 3,
+    }
+}
+
+fn status_letter(s: Status) -> &'static str {
+    ["M", "A", "U", "F"][status_code(s) as usize % 4]
+}
+
+/// Enable the watchdog: reset after 0.5 s without `wdr`.
+fn watchdog_on(dp: &board::Dp) {
+    avr_device::interrupt::free(|_| {
+        avr_device::asm::wdr();
+        dp.WDT.wdtcsr().write(|w| unsafe { w.bits(0x18) }); // WDCE | WDE
+        dp.WDT.wdtcsr().write(|w| unsafe { w.bits(0x0d) }); // WDE, 0.5 s
+    });
+}
+
+/// One planner step, timed in CPU cycles. The fences keep the compiler from
+/// moving work across the two clock reads.
+#[inline(never)]
+fn timed_step(planner: &mut Planner, pose: Pose, raw: &RawCounts) -> (planner_core::Output, u32) {
+    let t0 = clock::cycles();
+    compiler_fence(Ordering::SeqCst);
+    let out = planner.step_raw(core::hint::black_box(pose), core::hint::black_box(raw));
+    let out = core::hint::black_box(out);
+    compiler_fence(Ordering::SeqCst);
+    let t1 = clock::cycles();
+    (out, t1.wrapping_sub(t0))
+}
+
+fn read_u16() -> u16 {
+    let lo = serial::read_blocking() as u16;
+    lo | (serial::read_blocking() as u16) << 8
+}
+
+/// Replay mode (see [`protocol`]): frames in, commands and cycles out.
+fn replay(dp: &board::Dp, planner: &mut Planner) {
+    adc::stop(dp);
+    clock::stop_tick(dp);
+    // The cost of the timing itself, subtracted from each measurement.
+    let (_, overhead) = {
+        let t0 = clock::cycles();
+        compiler_fence(Ordering::SeqCst);
+        let t1 = clock::cycles();
+        ((), t1.wrapping_sub(t0))
+    };
+    while serial::read_blocking() == 0xa5 {
+        let x = read_u16() as i16;
+        let y = read_u16() as i16;
+        let heading = Angle(read_u16());
+        let mut raw = [0u16; 5];
+        for r in raw.iter_mut() {
+            *r = read_u16();
+        }
+        let pose = Pose {
+            position: Point::new(x, y),
+            heading,
+        };
+        let (out, cycles) = timed_step(planner, pose, &raw);
+        let cycles = cycles.saturating_sub(overhead);
+        serial::write(0x5a);
+        for b in out.command.heading.0.to_le_bytes() {
+            serial::write(b);
+        }
+        for b in out.command.step_mm.to_le_bytes() {
+            serial::write(b);
+        }
+        serial::write(status_code(out.status));
+        for b in cycles.to_le_bytes() {
+            serial::write(b);
+        }
+    }
+    clock::start_tick(dp);
+    adc::start(dp);
+}
+
+/// The planner with the default configuration. Not inlined: the config
+/// and builder temporaries then live in this frame, which is gone before
+/// `main` goes on, instead of in `main`'s for ever (RAM is 2 KB).
+#[inline(never)]
+fn new_planner() -> Option<Planner> {
+    let config = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().ok()?;
+    Some(Planner::new(config, Point::new(0, 0)))
+}
+
+#[avr_device::entry]
+fn main() -> ! {
+    stack::paint();
+    let Some(dp) = board::Dp::take() else {
+        panic!()
+    };
+    dp.PORTB
+        .ddrb()
+        .write(|w| unsafe { w.bits(board::DDRB_OUT) });
+    dp.PORTD
+        .ddrd()
+        .write(|w| unsafe { w.bits(board::DDRD_OUT) });
+    motors::init(&dp);
+    encoders::init(&dp);
+    clock::init(&dp);
+    serial::init(&dp);
+    adc::start(&dp);
+    watchdog_on(&dp);
+    // SAFETY: every shared static is behind an interrupt-free Mutex.
+    unsafe { avr_device::interrupt::enable() };
+
+    let mut out = Serial;
+    // Used in place (`as_mut`), never moved: a move is a second 900-byte
+    // copy on the stack.
+    let mut slot = new_planner();
+    let Some(planner) = slot.as_mut() else {
+        // Unreachable with the defaults; never drive with a bad config.
+        loop {
+            let _ = uwriteln!(out, "ERR config");
+            avr_device::asm::wdr();
+        }
+    };
+    let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
+    let mut executor = Executor::new(ExecutorConfig::default());
+    let mut driving = false;
+    if let Some(Request::Goal(x, y)) = BUILD_GOAL
+        .map(str::as_bytes)
+        .and_then(|g| protocol::parse(&[b"G ", g].concat_small()))
+    {
+        planner.set_goal(Point::new(x, y));
+        driving = true;
+    }
+    let _ = uwriteln!(out, "READY");
+
+    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    let mut last_ms = clock::millis();
+    let mut last_sweep = adc::sweeps().wrapping_sub(1);
+    loop {
+        avr_device::asm::wdr();
+        // Commands.
+        while let Some(b) = serial::read() {
+            if b != b'\n' {
+                if line.push(b).is_err() {
+                    line.clear(); // overlong: dropped, reported at its end
+                    let _ = line.push(b'!');
+                }
+                continue;
+            }
+            let req = protocol::parse(&line);
+            line.clear();
+            match req {
+                Some(Request::Goal(x, y)) => {
+                    planner.set_goal(Point::new(x, y));
+                    executor.halt();
+                    driving = true;
+                }
+                Some(Request::Pose(x, y, deg)) if !driving => {
+                    odometry.set_pose(Pose {
+                        position: Point::new(x, y),
+                        heading: Angle::from_deg(deg),
+                    });
+                }
+                Some(Request::Stop) => {
+                    executor.halt();
+                    driving = false;
+                    motors::set(&dp, Wheels::STOP);
+                }
+                Some(Request::Memory) => {
+                    let _ = uwriteln!(out, "M stack_peak={}", stack::peak());
+                    continue;
+                }
+                Some(Request::Replay(x, y)) if !driving => {
+                    let _ = uwriteln!(out, "OK");
+                    planner.set_goal(Point::new(x, y));
+                    replay(&dp, planner);
+                }
+                _ => {
+                    let _ = uwriteln!(out, "ERR");
+                    continue;
+                }
+            }
+            let _ = uwriteln!(out, "OK");
+        }
+
+        // Control tick, 1 kHz.
+        let now = clock::millis();
+        if now == last_ms {
+            continue;
+        }
+        last_ms = now;
+        let (l, r) = encoders::take();
+        odometry.update(l, r);
+        if !driving {
+            motors::set(&dp, Wheels::STOP);
+            continue;
+        }
+        let pose = odometry.pose();
+        if executor.is_idle() {
+            let Ok(raw) = adc::BackgroundAdc.read_raw();
+            let (step, cycles) = timed_step(planner, pose, &raw);
+            let _ = uwriteln!(
+                out,
+                "T {} {} {} {} {} {} {} {}",
+                now,
+                pose.position.x,
+                pose.position.y,
+                pose.heading.0,
+                status_letter(step.status),
+                step.command.heading.0,
+                step.command.step_mm,
+                cycles
+            );
+            if step.status != Status::Moving {
+                // Arrived, unreachable or a sensor fault: safe stop.
+                driving = false;
+                motors::set(&dp, Wheels::STOP);
+                continue;
+            }
+            executor.start(step.command);
+        }
+        // The guard runs on every control tick; a sweep of the five
+        // channels takes 0.5 ms, so each tick sees new counts.
+        let sweep = adc::sweeps();
+        let wheels = executor.tick(pose, odometry.travelled_mm(), |remaining| {
+            if sweep == last_sweep {
+                Guard::Continue
+            } else {
+                planner.guard_raw(&adc::latest(), remaining)
+            }
+        });
+        last_sweep = sweep;
+        motors::set(&dp, wheels);
+    }
+}
+
+/// `[a, b].concat()` into a small fixed buffer (no allocator here).
+trait ConcatSmall {
+    fn concat_small(&self) -> heapless::Vec<u8, 24>;
+}
+
+impl ConcatSmall for [&[u8]; 2] {
+    fn concat_small(&self) -> heapless::Vec<u8, 24> {
+        let mut v = heapless::Vec::new();
+        for part in self {
+            for &b in *part {
+                let _ = v.push(b);
+            }
+        }
+        v
+    }
+}

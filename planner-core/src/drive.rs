@@ -1,0 +1,368 @@
+//! The rover's body: differential-drive odometry from wheel-encoder ticks,
+//! and the turn-then-advance executor that carries out one [`Command`].
+//!
+//! Both firmwares share this code, so the only thing a board supplies is
+//! pins: encoder tick counts in, wheel duties out. Nothing here is from the
+//! papers; it is the executor that ALGORITHMS.md §5 assumes (turn in place,
+//! advance straight, ask the guard on the way).
+//!
+//! Formats (see [`crate::fixed`] for the rest): position in 1/4,096 mm (`i32`,
+//! ±524 m), heading in 1/2³² of a turn (`u32`, wraps), so that sub-tick
+//! motion accumulates without drift from rounding.
+
+use crate::command::{Command, Guard};
+use crate::fixed::{mul_q14, sat_i16, Angle, Point};
+use crate::Pose;
+
+/// The wheels and encoders of a rover.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Body {
+    /// Wheel travel per encoder tick, µm.
+    pub um_per_tick: u16,
+    /// Distance between the wheel contact points, mm.
+    pub wheel_base_mm: u16,
+}
+
+impl Body {
+    /// The reference rover: 65 mm wheels with 210 ticks per turn (an N20
+    /// gear motor with a 7-pulse magnetic encoder, 1:30), 130 mm track.
+    pub const REFERENCE: Body = Body {
+        um_per_tick: 972,
+        wheel_base_mm: 130,
+    };
+
+    /// Heading change per tick of wheel difference, 1/2³² turn:
+    /// Δθ = (Δr − Δl)·s / b radians (the differential-drive model).
+    fn angle_per_tick(self) -> i32 {
+        // 2³² / (2π) = 683,565,275.6; s/b in µm/µm. Done once, at build.
+        let num = self.um_per_tick as i64 * 683_565_276;
+        let den = (self.wheel_base_mm as i64 * 1_000).max(1);
+        (num / den).clamp(0, i32::MAX as i64) as i32
+    }
+}
+
+/// Dead reckoning from encoder ticks.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Odometry {
+    x: i32,
+    y: i32,
+    heading: u32,
+    /// Path length, 1/4,096 mm (wraps after 1 km; only differences are used).
+    travelled: u32,
+    q12_per_tick: i32,
+    angle_per_tick: i32,
+}
+
+impl Odometry {
+    /// Start at `pose`.
+    pub fn new(body: Body, pose: Pose) -> Self {
+        let mut o = Odometry {
+            x: 0,
+            y: 0,
+            heading: 0,
+            travelled: 0,
+            q12_per_tick: ((body.um_per_tick as i32) * 4_096 + 500) / 1_000,
+            angle_per_tick: body.angle_per_tick(),
+        };
+        o.set_pose(pose);
+        o
+    }
+
+    /// Reset the pose (a new start, or an external fix).
+    pub fn set_pose(&mut self, pose: Pose) {
+        self.x = (pose.position.x as i32) << 12;
+        self.y = (pose.position.y as i32) << 12;
+        self.heading = (pose.heading.0 as u32) << 16;
+    }
+
+    /// Add the ticks counted since the last update (signed: backwards is
+    /// negative). Integrates along the mean heading of the interval.
+    pub fn update(&mut self, left: i16, right: i16) {
+        if left == 0 && right == 0 {
+            return;
+        }
+        let dtheta = (right as i32 - left as i32).wrapping_mul(self.angle_per_tick);
+        let mid = Angle((self.heading.wrapping_add((dtheta / 2) as u32) >> 16) as u16);
+        self.heading = self.heading.wrapping_add(dtheta as u32);
+        let d = (left as i32 + right as i32) * self.q12_per_tick / 2;
+        self.x = self.x.saturating_add(mul_q14(d, mid.cos()));
+        self.y = self.y.saturating_add(mul_q14(d, mid.sin()));
+        self.travelled = self.travelled.wrapping_add(d.unsigned_abs());
+    }
+
+    /// The pose in the planner's formats.
+    pub fn pose(&self) -> Pose {
+        Pose {
+            position: Point::new(
+                sat_i16((self.x + 2_048) >> 12),
+                sat_i16((self.y + 2_048) >> 12),
+            ),
+            heading: Angle(((self.heading.wrapping_add(1 << 15)) >> 16) as u16),
+        }
+    }
+
+    /// Path length so far, mm (wrapping; subtract two readings).
+    pub fn travelled_mm(&self) -> u16 {
+        (self.travelled >> 12) as u16
+    }
+}
+
+/// Duties of the two wheels, −255 (full reverse) … 255 (full forward).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Wheels {
+    /// Left wheel duty.
+    pub left: i16,
+    /// Right wheel duty.
+    pub right: i16,
+}
+
+impl Wheels {
+    /// Both motors off.
+    pub const STOP: Wheels = Wheels { left: 0, right: 0 };
+}
+
+/// How the executor drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct ExecutorConfig {
+    /// A turn ends when the heading is this close to the command.
+    pub turn_tolerance: Angle,
+    /// Largest and smallest spin duty (the smallest still moves the wheels).
+    pub turn_duty: (i16, i16),
+    /// Cruise duty and the slowest duty that still moves.
+    pub advance_duty: (i16, i16),
+    /// Duty added per degree of heading error while advancing.
+    pub hold_gain: i16,
+    /// Slow down over this last part of a step, mm.
+    pub slow_mm: u16,
+}
+
+impl Default for ExecutorConfig {
+    fn default() -> Self {
+        ExecutorConfig {
+            turn_tolerance: Angle::from_decideg(10),
+            turn_duty: (160, 60),
+            advance_duty: (220, 70),
+            hold_gain: 12,
+            slow_mm: 40,
+        }
+    }
+}
+
+/// What the executor is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Phase {
+    /// Done with the last command: time to plan.
+    Idle,
+    /// Turning in place to `heading`, then advancing `step_mm`.
+    Turn {
+        /// Target heading.
+        heading: Angle,
+        /// Step to take after the turn.
+        step_mm: u16,
+    },
+    /// Advancing along `heading` until `travelled_mm` reaches `end_mm`.
+    Advance {
+        /// Heading to hold.
+        heading: Angle,
+        /// Odometry path length at which the step is complete.
+        end_mm: u16,
+    },
+}
+
+/// Turn-then-advance: one [`Command`] at a time.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Executor {
+    cfg: ExecutorConfig,
+    phase: Phase,
+}
+
+impl Executor {
+    /// An idle executor.
+    pub fn new(cfg: ExecutorConfig) -> Self {
+        Executor {
+            cfg,
+            phase: Phase::Idle,
+        }
+    }
+
+    /// The current phase.
+    pub fn phase(&self) -> Phase {
+        self.phase
+    }
+
+    /// Is it waiting for a command?
+    pub fn is_idle(&self) -> bool {
+        self.phase == Phase::Idle
+    }
+
+    /// Take a new command (replaces any command in progress).
+    pub fn start(&mut self, command: Command) {
+        self.phase = Phase::Turn {
+            heading: command.heading,
+            step_mm: command.step_mm,
+        };
+    }
+
+    /// Abandon the command (motors stop on the next tick).
+    pub fn halt(&mut self) {
+        self.phase = Phase::Idle;
+    }
+
+    /// One control tick: the wheel duties for the current pose. `guard` is
+    /// asked, with the distance still to go, on every tick of an advance.
+    pub fn tick(
+        &mut self,
+        pose: Pose,
+        travelled_mm: u16,
+        guard: impl FnOnce(u16) -> Guard,
+    ) -> Wheels {
+        let c = self.cfg;
+        match self.phase {
+            Phase::Idle => Wheels::STOP,
+            Phase::Turn { heading, step_mm } => {
+                let err = heading.sub(pose.heading);
+                if err.abs_signed() <= c.turn_tolerance.0 {
+                    self.phase = if step_mm == 0 {
+                        Phase::Idle
+                    } else {
+                        Phase::Advance {
+                            heading,
+                            end_mm: travelled_mm.wrapping_add(step_mm),
+                        }
+                    };
+                    return Wheels::STOP;
+                }
+                // Duty proportional to the error (1 duty per 0.35°), bounded.
+                let duty = ((err.abs_signed() >> 6) as i16).clamp(c.turn_duty.1, c.turn_duty.0);
+                if err.signed() > 0 {
+                    Wheels {
+                        left: -duty,
+                        right: duty,
+                    }
+                } else {
+                    Wheels {
+                        left: duty,
+                        right: -duty,
+                    }
+                }
+            }
+            Phase::Advance { heading, end_mm } => {
+                let remaining = end_mm.wrapping_sub(travelled_mm) as i16;
+                if remaining <= 0 || guard(remaining as u16) == Guard::Stop {
+                    self.phase = Phase::Idle;
+                    return Wheels::STOP;
+                }
+                let remaining = remaining as u16;
+                let (cruise, slow) = c.advance_duty;
+                let base = if remaining >= c.slow_mm {
+                    cruise
+                } else {
+                    (slow as i32 + (cruise - slow) as i32 * remaining as i32 / c.slow_mm as i32)
+                        as i16
+                };
+                // Heading hold: error in degrees (182 binary units per degree).
+                let err_deg = (heading.sub(pose.heading).signed() / 182).clamp(-10, 10);
+                let turn = err_deg * c.hold_gain;
+                Wheels {
+                    left: (base - turn).clamp(-255, 255),
+                    right: (base + turn).clamp(-255, 255),
+                }
+            }
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn origin() -> Pose {
+        Pose::default()
+    }
+
+    #[test]
+    fn straight_ticks_move_along_the_heading() {
+        let mut o = Odometry::new(Body::REFERENCE, origin());
+        for _ in 0..1_000 {
+            o.update(1, 1);
+        }
+        // 1,000 ticks × 0.972 mm = 972 mm.
+        assert_eq!(o.pose().position, Point::new(972, 0));
+        assert_eq!(o.pose().heading, Angle::ZERO);
+        // Path length is floored: 1,000 × 3,981 / 4,096 = 971.9.
+        assert_eq!(o.travelled_mm(), 971);
+    }
+
+    #[test]
+    fn spinning_in_place_turns_by_the_arc_over_the_base() {
+        let mut o = Odometry::new(Body::REFERENCE, origin());
+        // A quarter turn: each wheel travels π/2 · 65 mm = 102.1 mm = 105 ticks.
+        for _ in 0..105 {
+            o.update(-1, 1);
+        }
+        let deg = o.pose().heading.signed() as f64 * 360.0 / 65_536.0;
+        // 105 ticks · 0.972 mm · 2 / 130 mm = 1.5702 rad = 89.97°.
+        assert!((deg - 89.97).abs() < 0.05, "{deg}");
+        assert_eq!(o.pose().position, Point::new(0, 0));
+    }
+
+    #[test]
+    fn executor_turns_then_advances_then_goes_idle() {
+        let mut e = Executor::new(ExecutorConfig::default());
+        e.start(Command {
+            heading: Angle::from_deg(90),
+            step_mm: 100,
+        });
+        let w = e.tick(origin(), 0, |_| Guard::Continue);
+        assert!(w.left < 0 && w.right > 0, "counter-clockwise spin: {w:?}");
+        let facing = Pose {
+            heading: Angle::from_deg(90),
+            ..origin()
+        };
+        assert_eq!(e.tick(facing, 0, |_| Guard::Continue), Wheels::STOP);
+        let w = e.tick(facing, 0, |rem| {
+            assert_eq!(rem, 100);
+            Guard::Continue
+        });
+        assert_eq!((w.left, w.right), (220, 220));
+        // Near the end it slows down; at the end it stops and idles.
+        let w = e.tick(facing, 80, |_| Guard::Continue);
+        assert!(w.left < 220 && w.left >= 70);
+        assert_eq!(e.tick(facing, 100, |_| Guard::Continue), Wheels::STOP);
+        assert!(e.is_idle());
+    }
+
+    #[test]
+    fn the_guard_stops_an_advance() {
+        let mut e = Executor::new(ExecutorConfig::default());
+        e.start(Command {
+            heading: Angle::ZERO,
+            step_mm: 300,
+        });
+        e.tick(origin(), 65_500, |_| Guard::Continue); // aligned: to Advance
+                                                       // Path length wraps: 65,500 + 300 wraps past zero and still works.
+        assert!(!e.is_idle());
+        assert_eq!(e.tick(origin(), 10, |_| Guard::Stop), Wheels::STOP);
+        assert!(e.is_idle());
+    }
+
+    #[test]
+    fn heading_hold_steers_back() {
+        let mut e = Executor::new(ExecutorConfig::default());
+        e.start(Command {
+            heading: Angle::ZERO,
+            step_mm: 300,
+        });
+        e.tick(origin(), 0, |_| Guard::Continue);
+        let drifted_left = Pose {
+            heading: Angle::from_deg(3),
+            ..origin()
+        };
+        let w = e.tick(drifted_left, 0, |_| Guard::Continue);
+        assert!(w.left > w.right, "turn right to come back: {w:?}");
+    }
+}

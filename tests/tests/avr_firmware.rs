@@ -1,0 +1,79 @@
+//! The ATmega328P firmware in simavr: the same commands as the host core
+//! from the same recorded inputs, bit for bit; the planner step's cycle
+//! count; the flash and RAM budgets of issue 5.
+//!
+//! Two budgets are not met yet and their tests are ignored with the reason
+//! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
+//! the step costs tens of thousands of cycles (32-bit arithmetic compiles
+//! to long AVR sequences: one `atan2` is ~1,800 cycles, the free-distance
+//! rule ~7,500), and the firmware is ~25 KB of flash.
+
+use planner_core::AdcProfile;
+use rover_tests::avr::{elf_size, firmware_elf, Avr};
+use rover_tests::{mean_worst, standard_traces, Trace};
+use std::sync::OnceLock;
+
+/// Worst planner step allowed, cycles (issue 5's budget).
+const STEP_BUDGET: u32 = 8_000;
+
+/// The traces and the firmware's answers, computed once for all tests.
+fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u16) {
+    static R: OnceLock<(Vec<Trace>, Vec<u32>, u16)> = OnceLock::new();
+    R.get_or_init(|| {
+        let mut avr = Avr::boot();
+        let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
+        let mut cycles = Vec::new();
+        for t in &traces {
+            let got = avr.replay(t.goal, &t.frames);
+            for (k, ((out, c), want)) in got.iter().zip(&t.outputs).enumerate() {
+                assert_eq!(out, want, "{}: step {k}", t.name);
+                cycles.push(*c);
+            }
+        }
+        let peak = avr
+            .request("M")
+            .and_then(|l| l.strip_prefix("M stack_peak=").and_then(|v| v.parse().ok()))
+            .expect("stack peak reply");
+        (traces, cycles, peak)
+    })
+}
+
+#[test]
+fn replay_is_bit_exact() {
+    let (traces, cycles, peak) = replayed();
+    let steps: usize = traces.iter().map(|t| t.frames.len()).sum();
+    assert_eq!(cycles.len(), steps);
+    let (mean, worst) = mean_worst(cycles);
+    println!("avr step cycles over {steps} steps: mean={mean} worst={worst}; stack_peak={peak}");
+}
+
+#[test]
+fn ram_within_budget() {
+    let (_, _, peak) = replayed();
+    let (_, data, bss) = elf_size(&firmware_elf());
+    println!("avr ram: data={data} bss={bss} stack_peak={peak}");
+    assert!(data + bss <= 768, "data + bss {} > 768 B", data + bss);
+    // The stack must not have reached the static data (2 KB of RAM).
+    assert!(
+        data + bss + *peak as u32 <= 2_048,
+        "stack {peak} + statics overflow RAM"
+    );
+}
+
+#[test]
+#[ignore = "not met: the step costs ~40,000 cycles on average (issue 5 stays open)"]
+fn step_within_cycle_budget() {
+    let (_, cycles, _) = replayed();
+    let (_, worst) = mean_worst(cycles);
+    assert!(
+        worst <= STEP_BUDGET,
+        "worst step {worst} cycles > {STEP_BUDGET}"
+    );
+}
+
+#[test]
+#[ignore = "not met: the firmware is ~25 KB (issue 5 stays open)"]
+fn flash_within_budget() {
+    let (text, _, _) = elf_size(&firmware_elf());
+    assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
+}
