@@ -4,7 +4,7 @@
 //! IR sensors sampled in the background, wheel-encoder odometry, the
 //! turn-then-advance executor and the EAPF planner of `planner-core`, a
 //! text protocol on the serial port, and a watchdog. Pin map in [`board`],
-//! protocol in [`protocol`].
+//! serial protocol in `planner_core::protocol`.
 //!
 //! Board code is a thin register-level layer on `avr-device` (avr-hal is not
 //! on crates.io): one module per peripheral. Everything the rover decides is
@@ -19,7 +19,6 @@ mod board;
 mod clock;
 mod encoders;
 mod motors;
-mod protocol;
 mod serial;
 mod stack;
 
@@ -28,7 +27,7 @@ use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status,
 };
-use protocol::Request;
+use planner_core::protocol::{self, Request};
 use serial::Serial;
 use ufmt::uwriteln;
 

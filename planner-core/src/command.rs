@@ -80,12 +80,15 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
         let along = mul_q14(x, c) + mul_q14(y, s);
         let lateral = mul_q14(y, c) - mul_q14(x, s);
         if lateral.abs() < rs {
-            let half_chord = isqrt((rs * rs - lateral * lateral) as u32) as i32;
-            let mut limit = along - half_chord;
             if obstacle {
-                limit = limit.min(along - standoff);
+                free = free.min((along - standoff).max(0));
             }
-            free = free.min(limit.max(0));
+            // The chord can only lower `free` if `along − rs` is below it
+            // (the half chord is at most rs): skip the square root otherwise.
+            if along - rs < free {
+                let half_chord = isqrt((rs * rs - lateral * lateral) as u32) as i32;
+                free = free.min((along - half_chord).max(0));
+            }
         }
     }
     free as u16

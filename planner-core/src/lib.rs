@@ -27,7 +27,7 @@
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
 //! points), [`escape`] (virtual obstacles), [`command`] (output and the
 //! safety rule), [`config`]; [`drive`] (odometry and the turn-then-advance
-//! executor the firmwares share).
+//! executor the firmwares share), [`protocol`] (their serial command lines).
 //!
 //! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
 //! `embedded-hal` 0.2 (feature `hal02`) for the ADC adapter, because 1.0 has
@@ -43,6 +43,7 @@ pub mod escape;
 pub mod fixed;
 pub mod forces;
 pub mod memory;
+pub mod protocol;
 pub mod sensors;
 
 pub use command::{Command, Guard, Output, Status};

@@ -1,12 +1,13 @@
 //! Shared pieces of the cross-target tests: recorded input traces (pose and
 //! raw counts per planner step, from sim-host's worlds and sensors) and the
 //! host core's answers to them, plus the emulator harnesses of the two
-//! firmwares ([`avr`]).
+//! firmwares ([`avr`], [`stm32`]).
 //!
 //! Crates: `avr-tester` (simavr inside) drives the ATmega328P firmware: ADC
 //! pin voltages, pin levels, UART, exact cycle counts.
 
 pub mod avr;
+pub mod stm32;
 
 use planner_core::{AdcProfile, ConfigBuilder, Output, Planner, Point, Pose, RawCounts};
 use sim_host::geom::V2;

@@ -113,6 +113,15 @@ fn ensure_tools() {
             );
         }
     }
+    // defmt-print decodes the emulated STM32 firmware's log.
+    if output("defmt-print", &["--version"]).is_empty() {
+        run(
+            &dir,
+            "cargo",
+            &["+stable", "install", "--locked", "defmt-print"],
+            &[],
+        );
+    }
     let missing: Vec<&str> = DEBIAN_PACKAGES
         .iter()
         .copied()
@@ -244,19 +253,40 @@ fn avr_report() {
     );
 }
 
+/// Size and instruction figures of the STM32 firmware, measured in QEMU.
+fn stm32_report() {
+    run(
+        &root(),
+        "cargo",
+        &[
+            "+stable",
+            "run",
+            "--quiet",
+            "--release",
+            "-p",
+            "rover-tests",
+            "--bin",
+            "stm32-report",
+        ],
+        &[],
+    );
+}
+
 fn main() {
     let task = std::env::args().nth(1).unwrap_or_default();
     match task.as_str() {
         "ci" => ci(),
         "cross" => cross_builds(),
         "avr-report" => avr_report(),
+        "stm32-report" => stm32_report(),
         _ => {
-            eprintln!("usage: cargo xtask <ci|cross|avr-report>");
+            eprintln!("usage: cargo xtask <ci|cross|avr-report|stm32-report>");
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
-            eprintln!("  avr-report  firmware-avr size and step cycles (simavr)");
+            eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
+            eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             exit(2);
         }
     }

@@ -1,4 +1,4 @@
-//! The serial text protocol: one command per line (`\n` ends it, `\r` is
+//! The serial text protocol both firmwares speak: one command per line (`\n` ends it, `\r` is
 //! ignored), fields separated by spaces, integers in decimal.
 //!
 //! | line | meaning | reply |
@@ -24,11 +24,17 @@
 
 /// One parsed command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub enum Request {
+    /// `G x y`: new goal, mm.
     Goal(i16, i16),
+    /// `P x y deg`: set the pose, mm and whole degrees.
     Pose(i16, i16, i16),
+    /// `S`: stop.
     Stop,
+    /// `M`: memory report.
     Memory,
+    /// `R x y`: replay mode toward (x, y) mm.
     Replay(i16, i16),
 }
 
@@ -70,5 +76,35 @@ pub fn parse(line: &[u8]) -> Option<Request> {
     match f.next() {
         None => Some(req),
         Some(_) => None, // trailing fields
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lines_parse_to_requests() {
+        assert_eq!(parse(b"G 1200 -350"), Some(Request::Goal(1200, -350)));
+        assert_eq!(parse(b"P 0 0 90\r"), Some(Request::Pose(0, 0, 90)));
+        assert_eq!(parse(b"S"), Some(Request::Stop));
+        assert_eq!(parse(b"M"), Some(Request::Memory));
+        assert_eq!(parse(b"R  10   20"), Some(Request::Replay(10, 20)));
+    }
+
+    #[test]
+    fn bad_lines_are_refused() {
+        for bad in [
+            &b""[..],
+            b"G 1",
+            b"G 1 2 3",
+            b"G 40000 0",
+            b"G 1x 2",
+            b"X",
+            b"G - 2",
+            b"P 1 2",
+        ] {
+            assert_eq!(parse(bad), None, "{:?}", core::str::from_utf8(bad));
+        }
     }
 }

@@ -1,0 +1,194 @@
+//! The real board (STM32F411, 84 MHz from the internal oscillator).
+//!
+//! | pin | use |
+//! |---|---|
+//! | PA0–PA4 | IR sensors at −40°, −20°, 0°, +20°, +40° (ADC1 IN0–IN4, 3.3 V reference) |
+//! | PA6, PA7 | left, right motor PWM (TIM3 CH1, CH2, 20 kHz) → TB6612FNG PWMA, PWMB |
+//! | PB12, PB13 | left motor direction → AIN1, AIN2 |
+//! | PB14, PB15 | right motor direction → BIN1, BIN2 |
+//! | PB6, PB7 | left wheel encoder A, B (TIM4 encoder mode) |
+//! | PA15, PB3 | right wheel encoder A, B (TIM2 encoder mode) |
+//! | PA9, PA10 | USART1 TX, RX: 115,200 8N1, the command lines of `planner_core::protocol` |
+//! | SWDIO, SWCLK | probe-rs: flashing and defmt logs over RTT |
+//!
+//! The GP2Y0A21 outputs up to 3.1 V: within the 3.3 V ADC range, no divider.
+
+use core::fmt::Write as _;
+use cortex_m::peripheral::syst::SystClkSource;
+use defmt_rtt as _;
+use micromath::F32Ext;
+use panic_probe as _;
+use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use planner_core::protocol::{self, Request};
+use planner_core::sensors::OneShotSensors;
+use planner_core::{AdcProfile, Angle, ConfigBuilder, IrSensors, Planner, Point, Pose, Status};
+use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
+use stm32f4xx_hal::qei::Qei;
+use stm32f4xx_hal::watchdog::IndependentWatchdog;
+use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
+
+/// Wheel encoders: 210 counts per wheel turn with one channel; in x4 encoder
+/// mode the timers count 840, so four counts make one core tick.
+const COUNTS_PER_TICK: i32 = 4;
+
+pub fn run() -> ! {
+    let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+        panic!("peripherals taken twice")
+    };
+    let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(84.MHz()));
+    let gpioa = dp.GPIOA.split(&mut rcc);
+    let gpiob = dp.GPIOB.split(&mut rcc);
+
+    let adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
+    let mut sensors = OneShotSensors::new(
+        adc,
+        (
+            gpioa.pa0.into_analog(),
+            gpioa.pa1.into_analog(),
+            gpioa.pa2.into_analog(),
+            gpioa.pa3.into_analog(),
+            gpioa.pa4.into_analog(),
+        ),
+    );
+
+    let (_, (ch1, ch2, ..)) = dp.TIM3.pwm_hz(20.kHz(), &mut rcc);
+    let mut left_pwm = ch1.with(gpioa.pa6);
+    let mut right_pwm = ch2.with(gpioa.pa7);
+    left_pwm.enable();
+    right_pwm.enable();
+    let max_duty = left_pwm.get_max_duty() as i32;
+    let mut ain1 = gpiob.pb12.into_push_pull_output();
+    let mut ain2 = gpiob.pb13.into_push_pull_output();
+    let mut bin1 = gpiob.pb14.into_push_pull_output();
+    let mut bin2 = gpiob.pb15.into_push_pull_output();
+    let mut drive = |w: Wheels| {
+        left_pwm.set_duty((w.left.unsigned_abs() as i32 * max_duty / 255) as u16);
+        right_pwm.set_duty((w.right.unsigned_abs() as i32 * max_duty / 255) as u16);
+        ain1.set_state((w.left > 0).into());
+        ain2.set_state((w.left < 0).into());
+        bin1.set_state((w.right > 0).into());
+        bin2.set_state((w.right < 0).into());
+    };
+    drive(Wheels::STOP);
+
+    let left_enc = Qei::new(dp.TIM4, (gpiob.pb6, gpiob.pb7), &mut rcc);
+    // PA15 and PB3 leave their JTAG function (SWD keeps PA13/PA14).
+    let (pa15, pb3) = (gpioa.pa15.into_input(), gpiob.pb3.into_input());
+    let right_enc = Qei::new(dp.TIM2, (pa15, pb3), &mut rcc);
+    let (mut last_l, mut last_r) = (left_enc.count(), right_enc.count() as u16);
+
+    let Ok(serial) = dp
+        .USART1
+        .serial((gpioa.pa9, gpioa.pa10), 115_200.bps(), &mut rcc)
+    else {
+        panic!("serial set-up")
+    };
+    let (mut tx, mut rx) = serial.split();
+
+    let mut watchdog = IndependentWatchdog::new(dp.IWDG);
+    watchdog.start(500.millis());
+
+    // 1 kHz control tick from SysTick (polled).
+    let mut syst = cp.SYST;
+    syst.set_clock_source(SystClkSource::Core);
+    syst.set_reload(rcc.clocks.sysclk().raw() / 1_000 - 1);
+    syst.clear_current();
+    syst.enable_counter();
+
+    let Ok(config) = ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3).build() else {
+        panic!("bad config")
+    };
+    let mut planner = Planner::new(config, Point::new(0, 0));
+    let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
+    let mut executor = Executor::new(ExecutorConfig::default());
+    let mut driving = false;
+    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    let mut ms: u32 = 0;
+    defmt::info!("ready");
+    let _ = tx.write_str("READY\n");
+
+    loop {
+        watchdog.feed();
+        while let Ok(b) = rx.read() {
+            if b != b'\n' {
+                if line.push(b).is_err() {
+                    line.clear();
+                    let _ = line.push(b'!');
+                }
+                continue;
+            }
+            let reply = match protocol::parse(&line) {
+                Some(Request::Goal(x, y)) => {
+                    planner.set_goal(Point::new(x, y));
+                    executor.halt();
+                    driving = true;
+                    "OK\n"
+                }
+                Some(Request::Pose(x, y, deg)) if !driving => {
+                    odometry.set_pose(Pose {
+                        position: Point::new(x, y),
+                        heading: Angle::from_deg(deg),
+                    });
+                    "OK\n"
+                }
+                Some(Request::Stop) => {
+                    executor.halt();
+                    driving = false;
+                    "OK\n"
+                }
+                _ => "ERR\n",
+            };
+            line.clear();
+            let _ = tx.write_str(reply);
+        }
+
+        if !syst.has_wrapped() {
+            continue;
+        }
+        ms = ms.wrapping_add(1);
+        let (l, r) = (left_enc.count(), right_enc.count() as u16);
+        let dl = l.wrapping_sub(last_l) as i16 as i32 / COUNTS_PER_TICK;
+        let dr = r.wrapping_sub(last_r) as i16 as i32 / COUNTS_PER_TICK;
+        // Keep the remainders for the next tick.
+        last_l = last_l.wrapping_add((dl * COUNTS_PER_TICK) as u16);
+        last_r = last_r.wrapping_add((dr * COUNTS_PER_TICK) as u16);
+        odometry.update(dl as i16, dr as i16);
+        if !driving {
+            drive(Wheels::STOP);
+            continue;
+        }
+        let pose = odometry.pose();
+        let Ok(raw) = sensors.read_raw() else {
+            // An ADC error is a sensor fault: stop.
+            driving = false;
+            drive(Wheels::STOP);
+            defmt::error!("adc error: stopped");
+            continue;
+        };
+        if executor.is_idle() {
+            let out = planner.step_raw(pose, &raw);
+            let (dx, dy) = pose.position.to(planner.goal());
+            let to_goal_m = ((dx * dx + dy * dy) as f32).sqrt() / 1000.0;
+            defmt::info!(
+                "t={=u32}ms pose=({=i16},{=i16})mm heading={=f32}deg to_goal={=f32}m -> {} step={=u16}mm",
+                ms,
+                pose.position.x,
+                pose.position.y,
+                pose.heading.signed() as f32 * (360.0 / 65_536.0),
+                to_goal_m,
+                out.status,
+                out.command.step_mm
+            );
+            if out.status != Status::Moving {
+                driving = false;
+                drive(Wheels::STOP);
+                continue;
+            }
+            executor.start(out.command);
+        }
+        let wheels = executor.tick(pose, odometry.travelled_mm(), |remaining| {
+            planner.guard_raw(&raw, remaining)
+        });
+        drive(wheels);
+    }
+}

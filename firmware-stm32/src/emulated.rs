@@ -1,0 +1,147 @@
+//! The QEMU build: replay a recorded trace (pose and raw counts per step,
+//! compiled in from `ROVER_TRACE`) through the planner, time each step with
+//! SysTick, log command and count with defmt over semihosting, then exit
+//! QEMU. The host test decodes the log with `defmt-print` and compares each
+//! command with the host core's, bit for bit.
+//!
+//! Trace format (little-endian), one segment per recorded run: goal x, y
+//! (i16), frame count (u16), then frames of pose x, y (i16), heading (u16),
+//! five raw counts (u16).
+//!
+//! What is counted: SysTick runs on the CPU clock (168 MHz in QEMU's
+//! netduinoplus2); with `-icount shift=0` every instruction takes 1 ns of
+//! virtual time, so instructions = ticks × 1000 / 168. The count covers
+//! the call of `Planner::step` on the scripted source, minus the cost of
+//! the two SysTick reads (measured on an empty region).
+
+use core::sync::atomic::{compiler_fence, Ordering};
+use cortex_m::peripheral::syst::SystClkSource;
+use defmt_semihosting as _;
+use planner_core::{
+    AdcProfile, Angle, ConfigBuilder, Planner, Point, Pose, RawCounts, ScriptedSensors, Status,
+};
+
+static TRACE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/trace.bin"));
+
+/// Longest trace the build accepts.
+const MAX_FRAMES: usize = 600;
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    defmt::error!("panic");
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}
+
+fn word(i: usize) -> u16 {
+    match TRACE.get(i..i + 2) {
+        Some(b) => u16::from_le_bytes([b[0], b[1]]),
+        None => 0,
+    }
+}
+
+fn status_code(s: Status) -> u8 {
+    match s {
+        Status::Moving => 0,
+        Status::Arrived => 1,
+        Status::Unreachable => 2,
+        Status::SensorFault => 3,
+    }
+}
+
+pub fn run() -> ! {
+    let mut cp = cortex_m::Peripherals::take().unwrap_or_else(|| panic!());
+    cp.SYST.set_clock_source(SystClkSource::Core);
+    cp.SYST.set_reload(0x00ff_ffff);
+    cp.SYST.clear_current();
+    cp.SYST.enable_counter();
+    let now = || cortex_m::peripheral::SYST::get_current();
+    // SysTick counts down, 24 bits.
+    let ticks = |t0: u32, t1: u32| t0.wrapping_sub(t1) & 0x00ff_ffff;
+    let overhead = {
+        let t0 = now();
+        compiler_fence(Ordering::SeqCst);
+        let t1 = now();
+        ticks(t0, t1)
+    };
+
+    // Calibration: `asm::delay(n)` runs n + 1 iterations of a two-instruction
+    // loop (`subs`, `bne`); the host checks that SysTick counted
+    // 2(n + 1) · 168 / 1000 ticks for them.
+    let t0 = now();
+    cortex_m::asm::delay(100_000);
+    let t1 = now();
+    defmt::info!(
+        "calibration {=u32} {=u32}",
+        100_000,
+        ticks(t0, t1).saturating_sub(overhead)
+    );
+
+    let Ok(config) = ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3).build() else {
+        defmt::error!("bad config");
+        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
+        loop {
+            cortex_m::asm::wfi();
+        }
+    };
+    let mut planner = Planner::new(config, Point::new(0, 0));
+    // Segments: goal x, y (i16), frame count (u16), then the frames.
+    let mut at = 0;
+    while at + 6 <= TRACE.len() {
+        let goal = Point::new(word(at) as i16, word(at + 2) as i16);
+        let n = (word(at + 4) as usize).min(MAX_FRAMES);
+        at += 6;
+        let mut poses: heapless::Vec<Pose, MAX_FRAMES> = heapless::Vec::new();
+        let mut frames: heapless::Vec<RawCounts, MAX_FRAMES> = heapless::Vec::new();
+        for _ in 0..n {
+            let pose = Pose {
+                position: Point::new(word(at) as i16, word(at + 2) as i16),
+                heading: Angle(word(at + 4)),
+            };
+            let raw = [
+                word(at + 6),
+                word(at + 8),
+                word(at + 10),
+                word(at + 12),
+                word(at + 14),
+            ];
+            at += 16;
+            let _ = poses.push(pose);
+            let _ = frames.push(raw);
+        }
+        defmt::info!(
+            "segment {=usize} frames, goal {=i16} {=i16}",
+            n,
+            goal.x,
+            goal.y
+        );
+        planner.set_goal(goal);
+        let mut sensors = ScriptedSensors::new(&frames);
+        for pose in poses.iter() {
+            let t0 = now();
+            compiler_fence(Ordering::SeqCst);
+            let out = planner.step(core::hint::black_box(*pose), &mut sensors);
+            compiler_fence(Ordering::SeqCst);
+            let t1 = now();
+            let Ok(out) = out else {
+                defmt::error!("trace ended early");
+                break;
+            };
+            let t = ticks(t0, t1).saturating_sub(overhead);
+            defmt::info!(
+                "step {=u16} {=u16} {=u8} {=u32}",
+                out.command.heading.0,
+                out.command.step_mm,
+                status_code(out.status),
+                t
+            );
+        }
+    }
+    defmt::info!("done");
+    cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_SUCCESS);
+    loop {
+        cortex_m::asm::wfi();
+    }
+}

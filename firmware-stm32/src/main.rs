@@ -1,0 +1,39 @@
+//! # firmware-stm32
+//!
+//! The rover firmware for an STM32F411 (Nucleo-F411RE, WeAct Black Pill),
+//! running the same `planner-core` as the simulator and the ATmega328P.
+//! Two builds:
+//!
+//! - `board` (default): the real rover — 12-bit ADC on PA0–PA4 through the
+//!   core's embedded-hal 0.2 adapter, TIM3 PWM for the motors, TIM4 and TIM2
+//!   in encoder mode, the turn-then-advance executor with the core's guard,
+//!   goals over USART1, defmt logs over RTT, independent watchdog. Pin map in
+//!   [`board`].
+//! - `qemu`: for `qemu-system-arm -M netduinoplus2` (an STM32F405, same
+//!   Cortex-M4F), which has no RCC, a fake ADC and a cycle counter that
+//!   reads 0: no clock set-up, the sensors come from a recorded trace
+//!   through the core's scripted source, and each step's command and
+//!   SysTick count go out over defmt-semihosting ([`emulated`]).
+//!
+//! Crates: `cortex-m-rt` (start-up, vector table), `stm32f4xx-hal` pinned at
+//! 0.23.0 (its API changes between minors), `defmt` for logs (compact: the
+//! strings stay on the host), `micromath` for the float conveniences of the
+//! telemetry (never in the planner).
+#![no_std]
+#![no_main]
+
+#[cfg(all(feature = "board", not(feature = "qemu")))]
+mod board;
+#[cfg(feature = "qemu")]
+mod emulated;
+
+#[cfg(all(feature = "board", feature = "qemu"))]
+compile_error!("choose one of the features `board` and `qemu` (use --no-default-features)");
+
+#[cortex_m_rt::entry]
+fn main() -> ! {
+    #[cfg(feature = "qemu")]
+    emulated::run();
+    #[cfg(all(feature = "board", not(feature = "qemu")))]
+    board::run();
+}

@@ -1,0 +1,66 @@
+//! The STM32 firmware: its `qemu` build replays the standard traces in
+//! QEMU and must give the host core's commands bit for bit; the real-board
+//! build's size is within issue 6's budget. The planner step's instruction
+//! budget (3,000) is not met yet: its test is ignored with the reason (run
+//! it with `-- --ignored`).
+
+use planner_core::AdcProfile;
+use rover_tests::stm32::{board_elf, elf_size, instructions, run_traces};
+use rover_tests::{mean_worst, standard_traces};
+use std::sync::OnceLock;
+
+/// Worst planner step allowed, instructions (issue 6).
+const STEP_BUDGET: u32 = 3_000;
+
+/// The emulated run, once for all tests.
+fn run() -> &'static (Vec<u32>, usize) {
+    static R: OnceLock<(Vec<u32>, usize)> = OnceLock::new();
+    R.get_or_init(|| {
+        let traces = standard_traces(AdcProfile::STM32_12BIT_3V3);
+        let run = run_traces(&traces);
+        // The count model holds: the calibration loop's ticks are its
+        // instructions at 168 per µs (to a few ticks: the loop set-up).
+        let (n, ticks) = run.calibration;
+        let expect = n as u64 * 168 / 1_000;
+        assert!(
+            ticks.abs_diff(expect as u32) <= 4,
+            "calibration: {n} instructions, {ticks} ticks"
+        );
+        let want: Vec<_> = traces.iter().flat_map(|t| t.outputs.iter()).collect();
+        assert_eq!(run.steps.len(), want.len(), "steps reported");
+        let mut same = 0;
+        for (k, ((got, _), want)) in run.steps.iter().zip(&want).enumerate() {
+            assert_eq!(got, *want, "step {k}");
+            same += 1;
+        }
+        let counts = run.steps.iter().map(|&(_, t)| instructions(t)).collect();
+        (counts, same)
+    })
+}
+
+#[test]
+fn qemu_replay_is_bit_exact() {
+    let (counts, same) = run();
+    assert_eq!(*same, counts.len());
+    let (mean, worst) = mean_worst(counts);
+    println!("stm32 step instructions over {same} steps: mean={mean} worst={worst}");
+}
+
+#[test]
+#[ignore = "not met: worst step ~6,000 instructions (issue 6 stays open)"]
+fn step_within_instruction_budget() {
+    let (counts, _) = run();
+    let (_, worst) = mean_worst(counts);
+    assert!(
+        worst <= STEP_BUDGET,
+        "worst step {worst} instructions > {STEP_BUDGET}"
+    );
+}
+
+#[test]
+fn board_build_within_size_budget() {
+    let (text, data, bss) = elf_size(&board_elf());
+    println!("stm32 size: text={text} data={data} bss={bss}");
+    assert!(text <= 32 * 1024, "text {text} > 32 KB");
+    assert!(data + bss <= 16 * 1024, "data + bss {} > 16 KB", data + bss);
+}
