@@ -24,10 +24,10 @@ mod stack;
 
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use planner_core::protocol::{self, Request};
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status,
 };
-use planner_core::protocol::{self, Request};
 use serial::Serial;
 use ufmt::uwriteln;
 
@@ -138,7 +138,10 @@ fn new_planner() -> Option<Planner> {
 fn main() -> ! {
     stack::paint();
     let Some(dp) = board::Dp::take() else {
-        panic!()
+        // Only possible if `main` ran twice: stay stopped.
+        loop {
+            avr_device::asm::wdr();
+        }
     };
     dp.PORTB
         .ddrb()

@@ -37,14 +37,16 @@ fn USART_RX() {
         let b = dp.USART0.udr0().read().bits();
         // A full queue drops the byte: the line parser then reports an error.
         interrupt::free(|cs| {
-            let _ = RX.borrow(cs).borrow_mut().push_back(b);
+            if let Ok(mut q) = RX.borrow(cs).try_borrow_mut() {
+                let _ = q.push_back(b);
+            }
         });
     }
 }
 
 /// The next received byte, if any.
 pub fn read() -> Option<u8> {
-    interrupt::free(|cs| RX.borrow(cs).borrow_mut().pop_front())
+    interrupt::free(|cs| RX.borrow(cs).try_borrow_mut().ok()?.pop_front())
 }
 
 /// The next received byte, waiting for it (resetting the watchdog).

@@ -237,7 +237,7 @@ impl ConfigBuilder {
             return Err(ConfigError::SensorOffset);
         }
         let a = self.sensor_angles_deg;
-        let increasing = a.windows(2).all(|w| w[0] < w[1]);
+        let increasing = a.iter().zip(a.iter().skip(1)).all(|(x, y)| x < y);
         if !increasing || a[1] >= 0 || a[2] != 0 || a[3] <= 0 || a[0] < -90 || a[4] > 90 {
             return Err(ConfigError::SensorAngles);
         }

@@ -261,8 +261,10 @@ impl Executor {
                 let base = if remaining >= c.slow_mm {
                     cruise
                 } else {
-                    (slow as i32 + (cruise - slow) as i32 * remaining as i32 / c.slow_mm as i32)
-                        as i16
+                    let ramp = ((cruise - slow) as i32 * remaining as i32)
+                        .checked_div(c.slow_mm as i32)
+                        .unwrap_or(0);
+                    (slow as i32 + ramp) as i16
                 };
                 // Heading hold: error in degrees (182 binary units per degree).
                 let err_deg = (heading.sub(pose.heading).signed() / 182).clamp(-10, 10);

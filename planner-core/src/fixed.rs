@@ -141,8 +141,8 @@ impl Angle {
         }
         let (lo, hi) = if ay > ax { (ax, ay) } else { (ay, ax) };
         // t in Q15, 0 ..= 32768.
-        let t = ((lo << 15) / hi) as i32;
-        // Binary-angle constants: 0.2447 rad and 0.0663 rad in units of 2π/65536.
+        let t = (lo << 15).checked_div(hi).unwrap_or(0) as i32; // hi > 0 here
+                                                                // Binary-angle constants: 0.2447 rad and 0.0663 rad in units of 2π/65536.
         let p = 2_552 + ((692 * t) >> 15);
         let q = (t * (32_768 - t)) >> 15;
         let mut a = (t >> 2) + ((q * p) >> 15); // 0 ..= 8192 (45°)

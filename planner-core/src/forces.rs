@@ -122,8 +122,8 @@ pub fn sensor_group(m: Motion) -> &'static [usize] {
 pub fn off_sensor(cfg: &Config, heading: Angle, group: Motion, readings: &Readings) -> Force {
     let mut f = Force::ZERO;
     for &i in sensor_group(group) {
-        if readings[i] == Reading::Clear {
-            f = f.plus(Force::along(heading.add(cfg.sensor_angles[i]), cfg.xi_sen));
+        if let (Some(Reading::Clear), Some(&angle)) = (readings.get(i), cfg.sensor_angles.get(i)) {
+            f = f.plus(Force::along(heading.add(angle), cfg.xi_sen));
         }
     }
     f

@@ -150,8 +150,8 @@ impl Memory {
         }
         let n = n as i32;
         Some(Point::saturating(
-            robot.x as i32 - sx / n,
-            robot.y as i32 - sy / n,
+            robot.x as i32 - sx.checked_div(n)?,
+            robot.y as i32 - sy.checked_div(n)?,
         ))
     }
 

@@ -135,32 +135,40 @@ impl Calibration {
                 return Err(CalibrationError::TooFewPoints);
             }
         }
-        for w in sorted.windows(2) {
-            if w[0].0 >= w[1].0 || w[0].1 <= w[1].1 {
+        for (a, b) in sorted.iter().zip(sorted.iter().skip(1)) {
+            if a.0 >= b.0 || a.1 <= b.1 {
                 return Err(CalibrationError::NotMonotonic);
             }
         }
+        // (Indexing below goes through `get`: no panicking path, even where
+        // the length checks above already make it impossible.)
+        let (Some(&first), Some(&last)) = (sorted.first(), sorted.last()) else {
+            return Err(CalibrationError::TooFewPoints);
+        };
         let shift = adc.bits - (CAL_BINS.trailing_zeros() as u8);
         let mut mm = [0u16; CAL_BINS + 1];
         for (i, slot) in mm.iter_mut().enumerate() {
             let c = (i as i32) << shift;
             // The segment containing c, or the end segment to extrapolate.
             let k = sorted
-                .windows(2)
-                .position(|w| c <= w[1].0 as i32)
-                .unwrap_or(sorted.len() - 2);
-            let (c0, d0) = (sorted[k].0 as i32, sorted[k].1 as i32);
-            let (c1, d1) = (sorted[k + 1].0 as i32, sorted[k + 1].1 as i32);
+                .iter()
+                .skip(1)
+                .position(|q| c <= q.0 as i32)
+                .unwrap_or(sorted.len().saturating_sub(2));
+            let (Some(&(c0, d0)), Some(&(c1, d1))) = (sorted.get(k), sorted.get(k + 1)) else {
+                return Err(CalibrationError::TooFewPoints);
+            };
+            let (c0, d0, c1, d1) = (c0 as i32, d0 as i32, c1 as i32, d1 as i32);
             let num = (c - c0) * (d1 - d0);
-            let den = c1 - c0;
-            let d = d0 + (2 * num + den.signum() * den) / (2 * den);
+            let den = c1 - c0; // > 0: strictly increasing counts
+            let d = d0 + (2 * num + den).checked_div(2 * den).unwrap_or(0);
             *slot = d.clamp(0, 4_000) as u16;
         }
         Ok(Calibration {
             shift,
             full_scale,
-            near_count: sorted[sorted.len() - 1].0,
-            far_count: sorted[0].0,
+            near_count: last.0,
+            far_count: first.0,
             mm,
         })
     }
@@ -185,8 +193,8 @@ impl Calibration {
         } else {
             let i = (raw >> self.shift) as usize;
             let f = (raw & ((1 << self.shift) - 1)) as i32;
-            let d0 = self.mm[i] as i32;
-            let d1 = self.mm[(i + 1).min(CAL_BINS)] as i32;
+            let d0 = self.mm.get(i).copied().unwrap_or(0) as i32;
+            let d1 = self.mm.get(i + 1).copied().unwrap_or(d0 as u16) as i32;
             let half = 1i32 << (self.shift - 1);
             let d = d0 + (((d1 - d0) * f + half) >> self.shift);
             Reading::Range(d.clamp(0, u16::MAX as i32) as u16)

@@ -77,3 +77,21 @@ fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
 }
+
+/// No code path of the firmware (planner-core included) can panic: the
+/// linked image has no `core::panicking` function at all (the panic handler
+/// is there only as a safe stop that nothing calls).
+#[test]
+fn firmware_has_no_panicking_paths() {
+    let out = std::process::Command::new("avr-nm")
+        .arg(firmware_elf())
+        .output()
+        .expect("avr-nm (Debian binutils-avr, with gcc-avr)");
+    let symbols = String::from_utf8_lossy(&out.stdout);
+    assert!(symbols.lines().count() > 50, "avr-nm listed too little");
+    let panicking: Vec<&str> = symbols.lines().filter(|l| l.contains("panic")).collect();
+    assert!(
+        panicking.is_empty(),
+        "panicking paths linked: {panicking:#?}"
+    );
+}
