@@ -44,17 +44,8 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     loop {}
 }
 
-fn status_code(s: Status) -> u8 {
-    match s {
-        Status::Moving => 0,
-        Status::Arrived => 1,
-        Status::Unreachable => 2,
-        Status::SensorFault => 3,
-    }
-}
-
 fn status_letter(s: Status) -> &'static str {
-    ["M", "A", "U", "F"][status_code(s) as usize % 4]
+    ["M", "A", "U", "F"][s.code() as usize % 4]
 }
 
 /// Enable the watchdog: reset after 0.5 s without `wdr`.
@@ -116,7 +107,7 @@ fn replay(dp: &board::Dp, planner: &mut Planner) {
         for b in out.command.step_mm.to_le_bytes() {
             serial::write(b);
         }
-        serial::write(status_code(out.status));
+        serial::write(out.status.code());
         for b in cycles.to_le_bytes() {
             serial::write(b);
         }

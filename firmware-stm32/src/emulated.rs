@@ -18,7 +18,7 @@ use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use defmt_semihosting as _;
 use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, Planner, Point, Pose, RawCounts, ScriptedSensors, Status,
+    AdcProfile, Angle, ConfigBuilder, Planner, Point, Pose, RawCounts, ScriptedSensors,
 };
 
 static TRACE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/trace.bin"));
@@ -39,15 +39,6 @@ fn word(i: usize) -> u16 {
     match TRACE.get(i..i + 2) {
         Some(b) => u16::from_le_bytes([b[0], b[1]]),
         None => 0,
-    }
-}
-
-fn status_code(s: Status) -> u8 {
-    match s {
-        Status::Moving => 0,
-        Status::Arrived => 1,
-        Status::Unreachable => 2,
-        Status::SensorFault => 3,
     }
 }
 
@@ -134,7 +125,7 @@ pub fn run() -> ! {
                 "step {=u16} {=u16} {=u8} {=u32}",
                 out.command.heading.0,
                 out.command.step_mm,
-                status_code(out.status),
+                out.status.code(),
                 t
             );
         }

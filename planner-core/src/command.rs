@@ -34,6 +34,30 @@ pub enum Status {
     SensorFault,
 }
 
+impl Status {
+    /// One-byte code for links and logs: 0 moving, 1 arrived,
+    /// 2 unreachable, 3 sensor fault.
+    pub fn code(self) -> u8 {
+        match self {
+            Status::Moving => 0,
+            Status::Arrived => 1,
+            Status::Unreachable => 2,
+            Status::SensorFault => 3,
+        }
+    }
+
+    /// The status of a [`Status::code`]; `None` for any other byte.
+    pub fn from_code(code: u8) -> Option<Status> {
+        match code {
+            0 => Some(Status::Moving),
+            1 => Some(Status::Arrived),
+            2 => Some(Status::Unreachable),
+            3 => Some(Status::SensorFault),
+            _ => None,
+        }
+    }
+}
+
 /// The planner's output for one cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -110,6 +134,19 @@ pub fn guard(cfg: &Config, readings: &Readings, remaining_mm: u16) -> Guard {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn status_codes_round_trip() {
+        for s in [
+            Status::Moving,
+            Status::Arrived,
+            Status::Unreachable,
+            Status::SensorFault,
+        ] {
+            assert_eq!(Status::from_code(s.code()), Some(s));
+        }
+        assert_eq!(Status::from_code(4), None);
+    }
     use crate::config::ConfigBuilder;
     use crate::sensors::{AdcProfile, SENSOR_COUNT};
 

@@ -58,16 +58,7 @@ pub fn elf_size(elf: &std::path::Path) -> (u32, u32, u32) {
         .output()
         .expect("avr-size (Debian gcc-avr/binutils-avr)");
     let text = String::from_utf8_lossy(&out.stdout);
-    let nums: Vec<u32> = text
-        .lines()
-        .nth(1)
-        .unwrap_or("")
-        .split_whitespace()
-        .take(3)
-        .filter_map(|f| f.parse().ok())
-        .collect();
-    assert_eq!(nums.len(), 3, "avr-size output: {text}");
-    (nums[0], nums[1], nums[2])
+    crate::parse_size(&text).unwrap_or_else(|| panic!("avr-size output: {text}"))
 }
 
 /// The firmware running in simavr at 16 MHz.
@@ -156,12 +147,7 @@ impl Avr {
                 "replay answer header, frame {k}: {r:?} then {:?}",
                 String::from_utf8_lossy(&self.rx)
             );
-            let status = match r[5] {
-                0 => Status::Moving,
-                1 => Status::Arrived,
-                2 => Status::Unreachable,
-                _ => Status::SensorFault,
-            };
+            let status = Status::from_code(r[5]).expect("status code");
             let out = Output {
                 command: Command {
                     heading: Angle(u16::from_le_bytes([r[1], r[2]])),

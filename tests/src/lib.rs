@@ -113,3 +113,19 @@ pub fn mean_worst(v: &[u32]) -> (u32, u32) {
     };
     (mean, worst)
 }
+
+/// `(text, data, bss)` from the Berkeley-format output of `size` or
+/// `llvm-size` (second line, first three columns).
+pub fn parse_size(output: &str) -> Option<(u32, u32, u32)> {
+    let nums: Vec<u32> = output
+        .lines()
+        .nth(1)?
+        .split_whitespace()
+        .take(3)
+        .filter_map(|f| f.parse().ok())
+        .collect();
+    match nums[..] {
+        [t, d, b] => Some((t, d, b)),
+        _ => None,
+    }
+}

@@ -63,16 +63,7 @@ pub fn elf_size(elf: &std::path::Path) -> (u32, u32, u32) {
         .output()
         .expect("llvm-size or size");
     let text = String::from_utf8_lossy(&out.stdout);
-    let nums: Vec<u32> = text
-        .lines()
-        .nth(1)
-        .unwrap_or("")
-        .split_whitespace()
-        .take(3)
-        .filter_map(|f| f.parse().ok())
-        .collect();
-    assert_eq!(nums.len(), 3, "{} output: {text}", tool.display());
-    (nums[0], nums[1], nums[2])
+    crate::parse_size(&text).unwrap_or_else(|| panic!("{} output: {text}", tool.display()))
 }
 
 /// What the emulated firmware reported.
@@ -159,12 +150,7 @@ pub fn run_traces(traces: &[Trace]) -> QemuRun {
         match f.get(1).copied() {
             Some("calibration") => run.calibration = (2 * (num(2) + 1), num(3)),
             Some("step") => {
-                let status = match num(4) {
-                    0 => Status::Moving,
-                    1 => Status::Arrived,
-                    2 => Status::Unreachable,
-                    _ => Status::SensorFault,
-                };
+                let status = Status::from_code(num(4) as u8).expect("status code");
                 let out = Output {
                     command: Command {
                         heading: Angle(num(2) as u16),

@@ -234,8 +234,9 @@ fn ci() {
     eprintln!("\nxtask ci: all checks passed");
 }
 
-/// Size and cycle figures of the AVR firmware, measured in simavr.
-fn avr_report() {
+/// Firmware figures, measured now: `avr-report` (simavr) or `stm32-report`
+/// (QEMU), binaries of the tests crate.
+fn report(bin: &str) {
     run(
         &root(),
         "cargo",
@@ -247,26 +248,7 @@ fn avr_report() {
             "-p",
             "rover-tests",
             "--bin",
-            "avr-report",
-        ],
-        &[],
-    );
-}
-
-/// Size and instruction figures of the STM32 firmware, measured in QEMU.
-fn stm32_report() {
-    run(
-        &root(),
-        "cargo",
-        &[
-            "+stable",
-            "run",
-            "--quiet",
-            "--release",
-            "-p",
-            "rover-tests",
-            "--bin",
-            "stm32-report",
+            bin,
         ],
         &[],
     );
@@ -277,8 +259,8 @@ fn main() {
     match task.as_str() {
         "ci" => ci(),
         "cross" => cross_builds(),
-        "avr-report" => avr_report(),
-        "stm32-report" => stm32_report(),
+        "avr-report" => report("avr-report"),
+        "stm32-report" => report("stm32-report"),
         _ => {
             eprintln!("usage: cargo xtask <ci|cross|avr-report|stm32-report>");
             eprintln!(
