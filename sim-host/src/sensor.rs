@@ -96,6 +96,7 @@ pub struct VirtualSensors {
     reach_m: f64,
     gain: [f64; SENSOR_COUNT],
     held: [u16; SENSOR_COUNT],
+    held_v: [f64; SENSOR_COUNT],
     next_update: [f64; SENSOR_COUNT],
     rng: Pcg64,
 }
@@ -124,6 +125,7 @@ impl VirtualSensors {
             reach_m: 1.5,
             gain,
             held: [0; SENSOR_COUNT],
+            held_v: [0.0; SENSOR_COUNT],
             next_update: [f64::NEG_INFINITY; SENSOR_COUNT],
             rng,
         }
@@ -149,7 +151,8 @@ impl VirtualSensors {
             match self.mode {
                 SensorMode::Perfect => {
                     let d = self.true_distance(world, p, heading, i, t);
-                    self.held[i] = counts(self.adc, voltage(d, false));
+                    self.held_v[i] = voltage(d, false);
+                    self.held[i] = counts(self.adc, self.held_v[i]);
                 }
                 SensorMode::Realistic { noise_v, .. } => {
                     if t < self.next_update[i] {
@@ -160,6 +163,7 @@ impl VirtualSensors {
                         .map(|n| n.sample(&mut self.rng))
                         .unwrap_or(0.0);
                     let v = voltage(d, true) * self.gain[i] + noise;
+                    self.held_v[i] = v.max(0.0);
                     self.held[i] = counts(self.adc, v);
                     // The next value comes 28.7–47.9 ms later (datasheet).
                     let period = self.rng.gen_range(0.0287..=0.0479);
@@ -173,6 +177,12 @@ impl VirtualSensors {
             }
         }
         self.held
+    }
+
+    /// The output voltages behind the last [`VirtualSensors::read`], volts
+    /// (what an emulated ADC pin is driven with).
+    pub fn volts(&self) -> [f64; SENSOR_COUNT] {
+        self.held_v
     }
 }
 

@@ -162,3 +162,172 @@ impl Avr {
         got
     }
 }
+
+/// How a closed-loop drive ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum LoopOutcome {
+    /// The firmware reported arrival and the emulated rover is at the goal.
+    Reached,
+    /// The firmware reported `unreachable`.
+    Unreachable,
+    /// The firmware reported a sensor fault and stopped.
+    SensorFault,
+    /// The rover's disc touched an obstacle.
+    Collision,
+    /// Out of emulated time.
+    Timeout,
+}
+
+/// The emulated rover of the closed loop: the reference body
+/// (`planner_core::drive::Body::REFERENCE`), wheels at `duty/255 · 0.4 m/s`.
+pub const WHEEL_SPEED_MPS: f64 = 0.4;
+
+/// Result of [`drive`].
+#[derive(Debug)]
+pub struct LoopRun {
+    /// How it ended.
+    pub outcome: LoopOutcome,
+    /// Emulated seconds.
+    pub seconds: f64,
+    /// Distance driven, m.
+    pub path_m: f64,
+    /// Planner steps the firmware reported.
+    pub steps: usize,
+    /// Final true distance to the goal, m.
+    pub to_goal_m: f64,
+}
+
+/// Drive a scenario closed-loop: the emulated firmware reads the five ADC
+/// pins (driven with sim-host's realistic sensor voltages for the true
+/// pose), drives its PWM and direction pins, and counts encoder edges
+/// that this harness generates from the wheel travel; the harness moves
+/// the rover by what the pins say (duty measured by sampling the PWM pins
+/// every 16 µs) and checks collisions with the swept disc.
+pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRun {
+    use sim_host::geom::V2;
+    use sim_host::sensor::{SensorMode, VirtualSensors};
+    use sim_host::world::World;
+    let world = World::from_scenario(sc);
+    let mm_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick as f64 / 1e6;
+    let base = planner_core::drive::Body::REFERENCE.wheel_base_mm as f64 / 1e3;
+    let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
+    let mut sensors = VirtualSensors::new(
+        planner_core::AdcProfile::AVR_10BIT_5V,
+        SensorMode::REALISTIC,
+        angles,
+        0.1,
+        seed,
+    );
+    let mut a = Avr::boot();
+    let (mut p, mut h) = (V2::new(sc.start[0], sc.start[1]), sc.start_heading_rad());
+    let start = format!(
+        "P {} {} {}",
+        (p.x * 1e3).round(),
+        (p.y * 1e3).round(),
+        h.to_degrees().round()
+    );
+    assert_eq!(a.request(&start).as_deref(), Some("OK"), "{start}");
+    // The odometry starts at the rounded heading: so does the rover.
+    h = h.to_degrees().round().to_radians();
+    let goal = V2::new(sc.goal[0], sc.goal[1]);
+    let go = format!("G {} {}", (goal.x * 1e3).round(), (goal.y * 1e3).round());
+    assert_eq!(a.request(&go).as_deref(), Some("OK"), "{go}");
+
+    let (mut acc_l, mut acc_r) = (0.0f64, 0.0f64);
+    let mut path = 0.0;
+    let mut steps = 0;
+    let mut t = 0.0;
+    let dt = 0.001;
+    let outcome = 'run: loop {
+        if t > max_s {
+            break LoopOutcome::Timeout;
+        }
+        // Sensor voltages for the true pose. simavr's ADC reference is
+        // 3.3 V when the ELF does not declare AVCC: scale so that the
+        // firmware sees what a 5 V AVCC would give.
+        sensors.read(&world, p, h, t);
+        for (i, v) in sensors.volts().iter().enumerate() {
+            let mv = (v * 1_000.0 * 3_300.0 / 5_000.0)
+                .round()
+                .clamp(0.0, 3_300.0) as u32;
+            let mut pins = a.avr.pins();
+            match i {
+                0 => pins.adc0().set_mv(mv),
+                1 => pins.adc1().set_mv(mv),
+                2 => pins.adc2().set_mv(mv),
+                3 => pins.adc3().set_mv(mv),
+                _ => pins.adc4().set_mv(mv),
+            }
+        }
+        // One millisecond, sampling the PWM pins every 16 µs.
+        let (mut high_l, mut high_r, mut n) = (0u32, 0u32, 0u32);
+        for _ in 0..62 {
+            a.avr.run_for(256u64);
+            let mut pins = a.avr.pins();
+            high_l += pins.pd6().is_high() as u32;
+            high_r += pins.pd5().is_high() as u32;
+            n += 1;
+        }
+        a.run_us(8); // collect serial output
+        let mut pins = a.avr.pins();
+        let dir_l = pins.pd7().is_high() as i32 - pins.pb0().is_high() as i32;
+        let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
+        let vl = dir_l as f64 * high_l as f64 / n as f64 * WHEEL_SPEED_MPS;
+        let vr = dir_r as f64 * high_r as f64 / n as f64 * WHEEL_SPEED_MPS;
+        // Differential drive over dt, exact for constant wheel speeds.
+        let (v, w) = ((vl + vr) / 2.0, (vr - vl) / base);
+        let q = if w.abs() < 1e-9 {
+            p + V2::from_angle(h) * (v * dt)
+        } else {
+            let r = v / w;
+            V2::new(
+                p.x + r * ((h + w * dt).sin() - h.sin()),
+                p.y - r * ((h + w * dt).cos() - h.cos()),
+            )
+        };
+        if world.static_sweep_clearance(p, q) <= sc.robot_radius {
+            break LoopOutcome::Collision;
+        }
+        path += p.dist(q);
+        p = q;
+        h += w * dt;
+        t += dt;
+        // Encoder edges for the wheel travel (at most one per millisecond
+        // per wheel at this speed).
+        acc_l += (vl * dt).abs();
+        acc_r += (vr * dt).abs();
+        if acc_l >= mm_per_tick {
+            acc_l -= mm_per_tick;
+            a.avr.pins().pd2().set_high();
+        }
+        if acc_r >= mm_per_tick {
+            acc_r -= mm_per_tick;
+            a.avr.pins().pd3().set_high();
+        }
+        a.avr.run_for(64u64);
+        a.avr.pins().pd2().set_low();
+        a.avr.pins().pd3().set_low();
+        // Telemetry.
+        while let Some(i) = a.rx.iter().position(|&b| b == b'\n') {
+            let line: Vec<u8> = a.rx.drain(..=i).collect();
+            let line = String::from_utf8_lossy(&line);
+            let f: Vec<&str> = line.split_whitespace().collect();
+            if f.first() == Some(&"T") {
+                steps += 1;
+                match f.get(5).copied() {
+                    Some("A") => break 'run LoopOutcome::Reached,
+                    Some("U") => break 'run LoopOutcome::Unreachable,
+                    Some("F") => break 'run LoopOutcome::SensorFault,
+                    _ => {}
+                }
+            }
+        }
+    };
+    LoopRun {
+        outcome,
+        seconds: t,
+        path_m: path,
+        steps,
+        to_goal_m: p.dist(goal),
+    }
+}

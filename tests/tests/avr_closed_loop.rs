@@ -1,0 +1,33 @@
+//! The ATmega328P firmware drives emulated rovers to their goals: sim-host's
+//! worlds and sensors on its ADC pins, its motor pins and encoder inputs
+//! closing the loop (see `rover_tests::avr::drive`).
+
+use rover_tests::avr::{drive, LoopOutcome};
+use rover_tests::scenario;
+
+fn reaches(rel: &str) {
+    let sc = scenario(rel);
+    let run = drive(&sc, 1, 400.0);
+    println!(
+        "{}: {:?} after {:.1} s, {} steps, {:.2} m driven, {:.3} m from the goal",
+        sc.name, run.outcome, run.seconds, run.steps, run.path_m, run.to_goal_m
+    );
+    assert_eq!(run.outcome, LoopOutcome::Reached, "{}", sc.name);
+    // Odometry error stays within the goal tolerance plus a few centimetres.
+    assert!(
+        run.to_goal_m < 0.15,
+        "{}: {:.3} m from the goal",
+        sc.name,
+        run.to_goal_m
+    );
+}
+
+#[test]
+fn drives_the_u_trap_to_the_goal() {
+    reaches("traps/u-trap.toml");
+}
+
+#[test]
+fn drives_a_paper_world_to_the_goal() {
+    reaches("paper/env1-ex1.toml");
+}
