@@ -19,6 +19,7 @@ mod board;
 mod clock;
 mod encoders;
 mod motors;
+mod replay;
 mod serial;
 mod stack;
 
@@ -70,48 +71,11 @@ fn timed_step(planner: &mut Planner, pose: Pose, raw: &RawCounts) -> (planner_co
     (out, t1.wrapping_sub(t0))
 }
 
-fn read_u16() -> u16 {
-    let lo = serial::read_blocking() as u16;
-    lo | (serial::read_blocking() as u16) << 8
-}
-
 /// Replay mode (see [`protocol`]): frames in, commands and cycles out.
 fn replay(dp: &board::Dp, planner: &mut Planner) {
     adc::stop(dp);
     clock::stop_tick(dp);
-    // The cost of the timing itself, subtracted from each measurement.
-    let (_, overhead) = {
-        let t0 = clock::cycles();
-        compiler_fence(Ordering::SeqCst);
-        let t1 = clock::cycles();
-        ((), t1.wrapping_sub(t0))
-    };
-    while serial::read_blocking() == 0xa5 {
-        let x = read_u16() as i16;
-        let y = read_u16() as i16;
-        let heading = Angle(read_u16());
-        let mut raw = [0u16; 5];
-        for r in raw.iter_mut() {
-            *r = read_u16();
-        }
-        let pose = Pose {
-            position: Point::new(x, y),
-            heading,
-        };
-        let (out, cycles) = timed_step(planner, pose, &raw);
-        let cycles = cycles.saturating_sub(overhead);
-        serial::write(0x5a);
-        for b in out.command.heading.0.to_le_bytes() {
-            serial::write(b);
-        }
-        for b in out.command.step_mm.to_le_bytes() {
-            serial::write(b);
-        }
-        serial::write(out.status.code());
-        for b in cycles.to_le_bytes() {
-            serial::write(b);
-        }
-    }
+    replay::serve(|pose, raw| timed_step(planner, pose, raw));
     clock::start_tick(dp);
     adc::start(dp);
 }

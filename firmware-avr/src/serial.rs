@@ -59,6 +59,19 @@ pub fn read_blocking() -> u8 {
     }
 }
 
+/// A little-endian `u16` from the next two bytes (blocking).
+pub fn read_u16_le() -> u16 {
+    let lo = read_blocking() as u16;
+    lo | (read_blocking() as u16) << 8
+}
+
+/// Send bytes.
+pub fn write_all(bytes: &[u8]) {
+    for &b in bytes {
+        write(b);
+    }
+}
+
 /// Send one byte.
 pub fn write(b: u8) {
     let dp = steal();
@@ -72,9 +85,7 @@ pub struct Serial;
 impl ufmt::uWrite for Serial {
     type Error = core::convert::Infallible;
     fn write_str(&mut self, s: &str) -> Result<(), Self::Error> {
-        for b in s.bytes() {
-            write(b);
-        }
+        write_all(s.as_bytes());
         Ok(())
     }
 }

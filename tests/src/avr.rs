@@ -11,7 +11,7 @@ use std::sync::Mutex;
 /// CPU clock of the board, Hz.
 pub const F_CPU: u32 = 16_000_000;
 
-static BUILT: Mutex<Option<PathBuf>> = Mutex::new(None);
+static BUILT: Mutex<Vec<(&'static str, PathBuf)>> = Mutex::new(Vec::new());
 
 /// A command for `cargo` in `dir` that uses that folder's own toolchain
 /// file and config, not the ones of the cargo that runs these tests.
@@ -33,21 +33,33 @@ pub fn clean_cargo(dir: &std::path::Path) -> Cmd {
     c
 }
 
-/// Build the firmware (release) once per process; the ELF path.
-pub fn firmware_elf() -> PathBuf {
+/// Build one binary of firmware-avr (release) once per process.
+fn build(bin: &'static str, features: &[&str]) -> PathBuf {
     let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some(p) = built.as_ref() {
+    if let Some((_, p)) = built.iter().find(|(b, _)| *b == bin) {
         return p.clone();
     }
     let dir = repo_root().join("firmware-avr");
-    let status = clean_cargo(&dir)
-        .args(["build", "--release", "--quiet"])
-        .status()
-        .expect("run cargo for firmware-avr");
-    assert!(status.success(), "firmware-avr build failed");
-    let elf = dir.join("target/avr-none/release/firmware-avr.elf");
-    *built = Some(elf.clone());
+    let mut cmd = clean_cargo(&dir);
+    cmd.args(["build", "--release", "--quiet", "--bin", bin]);
+    if !features.is_empty() {
+        cmd.args(["--features", &features.join(",")]);
+    }
+    let status = cmd.status().expect("run cargo for firmware-avr");
+    assert!(status.success(), "firmware-avr build of {bin} failed");
+    let elf = dir.join(format!("target/avr-none/release/{bin}.elf"));
+    built.push((bin, elf.clone()));
     elf
+}
+
+/// The firmware (release build); the ELF path.
+pub fn firmware_elf() -> PathBuf {
+    build("firmware-avr", &[])
+}
+
+/// The `f32-step` bench: the same step in f32 with avr-libc's math.
+pub fn f32_step_elf() -> PathBuf {
+    build("f32-step", &["f32-step"])
 }
 
 /// Section sizes of an AVR ELF: (text, data, bss), from `avr-size` (binutils
@@ -71,9 +83,12 @@ pub struct Avr {
 impl Avr {
     /// Boot the firmware and wait for its `READY` line.
     pub fn boot() -> Avr {
-        let avr = AvrTester::atmega328p()
-            .with_clock(F_CPU)
-            .load(firmware_elf());
+        Avr::boot_elf(&firmware_elf())
+    }
+
+    /// Boot an ELF that greets with `READY` (the firmware or a bench).
+    pub fn boot_elf(elf: &std::path::Path) -> Avr {
+        let avr = AvrTester::atmega328p().with_clock(F_CPU).load(elf);
         let mut a = Avr {
             avr,
             rx: Vec::new(),

@@ -9,7 +9,7 @@
 //! rule ~7,500), and the firmware is ~25 KB of flash.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{elf_size, firmware_elf, Avr};
+use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
 use rover_tests::{mean_worst, standard_traces, Trace};
 use std::sync::OnceLock;
 
@@ -94,4 +94,48 @@ fn firmware_has_no_panicking_paths() {
         panicking.is_empty(),
         "panicking paths linked: {panicking:#?}"
     );
+}
+
+/// The f32 bench really computes the step: its commands agree with the
+/// same float planner on the host (planner-float with the `libm` crate
+/// where the AVR uses avr-libc) on nearly every step, and it prints its
+/// cycle count next to the fixed-point one.
+#[test]
+fn f32_bench_computes_the_same_float_step() {
+    use planner_float::FloatPlanner;
+    use std::f64::consts::TAU;
+    let (traces, fixed, _) = replayed();
+    let cfg = planner_core::ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap();
+    let mut avr = Avr::boot_elf(&f32_step_elf());
+    let (mut agree, mut total, mut cycles) = (0, 0, Vec::new());
+    for t in traces {
+        let got = avr.replay(t.goal, &t.frames);
+        let mut host = FloatPlanner::<f32>::new((t.goal.x as f32, t.goal.y as f32), false);
+        for (f, (out, c)) in t.frames.iter().zip(&got) {
+            let h = f.pose.heading.signed() as f32 * (TAU as f32 / 65_536.0);
+            let (hh, hs, hst) = host.step(
+                &cfg,
+                f.pose.position.x as f32,
+                f.pose.position.y as f32,
+                h,
+                &f.raw,
+            );
+            let host_heading = (hh * (65_536.0 / TAU as f32)) as i32 as u16;
+            let dh = out.command.heading.0.wrapping_sub(host_heading) as i16;
+            let ok = out.status == hst
+                && dh.unsigned_abs() <= 20 // 0.11°
+                && (out.command.step_mm as f32 - hs).abs() <= 1.5;
+            agree += ok as usize;
+            total += 1;
+            cycles.push(*c);
+        }
+    }
+    let (mean, worst) = mean_worst(&cycles);
+    let (_, fixed_worst) = mean_worst(fixed);
+    println!(
+        "f32 step on the AVR: mean={mean} worst={worst} cycles ({agree}/{total} steps agree with the host); fixed-point worst {fixed_worst}"
+    );
+    assert!(agree * 100 >= total * 95, "{agree}/{total} steps agree");
 }

@@ -3,15 +3,16 @@
 //! traces), measured now, nothing typed in.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{elf_size, firmware_elf, Avr};
+use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
 use rover_tests::{mean_worst, standard_traces};
 
 fn main() {
     let (text, data, bss) = elf_size(&firmware_elf());
+    let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
     let mut avr = Avr::boot();
     let mut cycles = Vec::new();
     let mut mismatches = 0;
-    for t in standard_traces(AdcProfile::AVR_10BIT_5V) {
+    for t in &traces {
         for ((out, c), want) in avr.replay(t.goal, &t.frames).iter().zip(&t.outputs) {
             mismatches += usize::from(out != want);
             cycles.push(*c);
@@ -22,9 +23,16 @@ fn main() {
         .and_then(|l| l.strip_prefix("M stack_peak=").map(str::to_owned))
         .unwrap_or_else(|| "unknown".into());
     let (mean, worst) = mean_worst(&cycles);
+    // The same steps through the f32 build (planner-float, avr-libc math).
+    let mut float = Avr::boot_elf(&f32_step_elf());
+    let f32_cycles: Vec<u32> = traces
+        .iter()
+        .flat_map(|t| float.replay(t.goal, &t.frames))
+        .map(|(_, c)| c)
+        .collect();
+    let (_, f32_worst) = mean_worst(&f32_cycles);
     println!("avr size: text={text} data={data} bss={bss} stack_peak={peak}");
-    // No f32 build of the planner exists yet, so there is no float figure.
-    println!("avr step cycles: mean={mean} worst={worst} f32_worst=unmeasured");
+    println!("avr step cycles: mean={mean} worst={worst} f32_worst={f32_worst}");
     if mismatches > 0 {
         eprintln!("avr-report: {mismatches} steps differ from the host core");
         std::process::exit(1);

@@ -1,0 +1,130 @@
+//! The `f32-step` bench: the same planner step in `f32` with `libm`
+//! (`planner-float`), on the same MCU, in replay mode, so that the fixed-
+//! point step's cycle count can be compared with a floating-point port.
+//! It speaks the firmware's replay protocol (`R x y`, then frames) and
+//! nothing else; it drives no motors.
+#![no_std]
+#![no_main]
+#![feature(abi_avr_interrupt)]
+
+#[path = "../board.rs"]
+#[allow(dead_code)]
+mod board;
+#[path = "../clock.rs"]
+#[allow(dead_code)]
+mod clock;
+#[path = "../replay.rs"]
+mod replay;
+#[path = "../serial.rs"]
+#[allow(dead_code)]
+mod serial;
+
+use core::f32::consts::TAU;
+use core::sync::atomic::{compiler_fence, Ordering};
+use planner_core::protocol::{self, Request};
+use planner_core::{AdcProfile, Angle, Command, ConfigBuilder, Output};
+use planner_float::{FloatPlanner, Math};
+use ufmt::uwriteln;
+
+// avr-libc's math library (its `double` is 32-bit), as an Arduino sketch
+// would use: compact assembly, unlike a Rust port of musl's.
+#[link(name = "m")]
+extern "C" {
+    fn sin(x: f32) -> f32;
+    fn cos(x: f32) -> f32;
+    fn atan2(y: f32, x: f32) -> f32;
+    fn hypot(x: f32, y: f32) -> f32;
+    fn sqrt(x: f32) -> f32;
+}
+
+/// avr-libc as the float planner's math.
+struct AvrLibc;
+
+impl Math<f32> for AvrLibc {
+    fn sin(x: f32) -> f32 {
+        // SAFETY: pure functions of their arguments.
+        unsafe { sin(x) }
+    }
+    fn cos(x: f32) -> f32 {
+        // SAFETY: as above.
+        unsafe { cos(x) }
+    }
+    fn atan2(y: f32, x: f32) -> f32 {
+        // SAFETY: as above.
+        unsafe { atan2(y, x) }
+    }
+    fn hypot(x: f32, y: f32) -> f32 {
+        // SAFETY: as above.
+        unsafe { hypot(x, y) }
+    }
+    fn sqrt(x: f32) -> f32 {
+        // SAFETY: as above.
+        unsafe { sqrt(x) }
+    }
+}
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    loop {
+        avr_device::asm::nop();
+    }
+}
+
+#[avr_device::entry]
+fn main() -> ! {
+    let Some(dp) = board::Dp::take() else {
+        loop {
+            avr_device::asm::nop();
+        }
+    };
+    clock::init(&dp);
+    clock::stop_tick(&dp);
+    serial::init(&dp);
+    // SAFETY: every shared static is behind an interrupt-free Mutex.
+    unsafe { avr_device::interrupt::enable() };
+    let mut out = serial::Serial;
+    let Ok(cfg) = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build() else {
+        loop {
+            avr_device::asm::nop();
+        }
+    };
+    let _ = uwriteln!(out, "READY");
+    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    loop {
+        let b = serial::read_blocking();
+        if b != b'\n' {
+            let _ = line.push(b);
+            continue;
+        }
+        let Some(Request::Replay(x, y)) = protocol::parse(&line) else {
+            line.clear();
+            let _ = uwriteln!(out, "ERR");
+            continue;
+        };
+        line.clear();
+        let _ = uwriteln!(out, "OK");
+        let mut planner = FloatPlanner::<f32, AvrLibc>::new((x as f32, y as f32), false);
+        replay::serve(|pose, raw| {
+            let (px, py) = (pose.position.x as f32, pose.position.y as f32);
+            let h = pose.heading.signed() as f32 * (TAU / 65_536.0);
+            let t0 = clock::cycles();
+            compiler_fence(Ordering::SeqCst);
+            let (fh, fs, status) = planner.step(
+                &cfg,
+                core::hint::black_box(px),
+                core::hint::black_box(py),
+                core::hint::black_box(h),
+                core::hint::black_box(raw),
+            );
+            let (fh, fs) = core::hint::black_box((fh, fs));
+            compiler_fence(Ordering::SeqCst);
+            let t1 = clock::cycles();
+            let command = Command {
+                heading: Angle((fh * (65_536.0 / TAU)) as i32 as u16),
+                step_mm: fs as u16,
+            };
+            (Output { command, status }, t1.wrapping_sub(t0))
+        });
+        let _ = uwriteln!(out, "OK");
+    }
+}

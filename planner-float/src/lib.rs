@@ -1,0 +1,418 @@
+//! # planner-float
+//!
+//! The EAPF planner step of `planner-core`, written again from the equations
+//! (ALGORITHMS.md §2 and the choices documented in planner-core) in floating
+//! point, generic over `f32` and `f64`. Two uses:
+//!
+//! - `f64`: the reference that bounds planner-core's fixed-point error
+//!   (`planner-core/tests/float_reference.rs`). It reports how close each
+//!   discrete decision came to its threshold ([`FloatPlanner::margin`]), so
+//!   that cases where 1 mm of rounding may flip a decision can be set aside.
+//! - `f32`: what a "naive" floating-point port of the same step costs on the
+//!   ATmega328P (software float, `libm`), measured by the firmware's
+//!   `f32-step` bench.
+//!
+//! It covers the EAPF step (sensors, collision points, memory, forces,
+//! motion classes, heading, step and the safety rule), not the escape.
+//!
+//! Crates: `num-traits` (with `libm`) for one `Float` bound over both widths
+//! without `std`; `heapless` for the bounded memory.
+#![no_std]
+#![forbid(unsafe_code)]
+#![warn(missing_docs)]
+// The equations index sensors the way the paper does (i = 0..5).
+#![allow(clippy::needless_range_loop)]
+
+use num_traits::{Float, FloatConst};
+use planner_core::{Config, Status, SENSOR_COUNT};
+
+/// A reading in floating point.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum R<F> {
+    /// An obstacle this far from the sensor face, mm.
+    Range(F),
+    /// Nothing in range.
+    Clear,
+    /// Nearer than the table trusts.
+    TooClose,
+    /// Impossible count.
+    Implausible,
+}
+
+/// Robot radius, mm (planner-core's default configuration).
+pub const RADIUS: f64 = 100.0;
+/// Sensor face offset from the centre, mm.
+pub const OFFSET: f64 = 100.0;
+/// Sensor range, mm.
+pub const RANGE: f64 = 800.0;
+/// Clearance added to the radius, mm.
+pub const CLEARANCE: f64 = 20.0;
+/// Stand-off kept in front of the sensor faces, mm.
+pub const STANDOFF: f64 = 100.0;
+/// Goal tolerance, mm.
+pub const TOL_GOAL: f64 = 50.0;
+/// Shortest step, mm.
+pub const MIN_STEP: f64 = 10.0;
+/// Sensor angles, degrees.
+pub const ANGLES: [f64; 5] = [-40.0, -20.0, 0.0, 20.0, 40.0];
+
+fn c<F: Float>(v: f64) -> F {
+    F::from(v).unwrap_or_else(F::zero)
+}
+
+/// Wrap an angle into [−π, π).
+pub fn wrap<F: Float + FloatConst>(a: F) -> F {
+    let tau = F::TAU();
+    a - tau * ((a + F::PI()) / tau).floor()
+}
+
+/// Where the transcendental functions come from: [`Libm`] (the `libm`
+/// crate, through num-traits) by default; a firmware can supply its C
+/// library's (the AVR bench uses avr-libc's, as an Arduino sketch would).
+pub trait Math<F> {
+    /// sin x.
+    fn sin(x: F) -> F;
+    /// cos x.
+    fn cos(x: F) -> F;
+    /// atan2(y, x).
+    fn atan2(y: F, x: F) -> F;
+    /// √(x² + y²).
+    fn hypot(x: F, y: F) -> F;
+    /// √x.
+    fn sqrt(x: F) -> F;
+}
+
+/// The `libm` crate's functions.
+pub struct Libm;
+
+impl<F: Float> Math<F> for Libm {
+    fn sin(x: F) -> F {
+        x.sin()
+    }
+    fn cos(x: F) -> F {
+        x.cos()
+    }
+    fn atan2(y: F, x: F) -> F {
+        y.atan2(x)
+    }
+    fn hypot(x: F, y: F) -> F {
+        x.hypot(y)
+    }
+    fn sqrt(x: F) -> F {
+        x.sqrt()
+    }
+}
+
+/// The float planner's state.
+pub struct FloatPlanner<F, M = Libm> {
+    math: core::marker::PhantomData<M>,
+    goal: (F, F),
+    memory: heapless::Vec<((F, F), u8), 16>,
+    following: bool,
+    paper_step: F,
+    last_mm: [F; SENSOR_COUNT],
+    track: bool,
+    /// Smallest distance of any discrete decision from its threshold since
+    /// it was last reset (only when built with `tracking`).
+    pub margin: F,
+}
+
+impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
+    /// A planner heading for `goal` (mm); `tracking` turns the decision
+    /// margins on (the reference needs them, a benchmark does not).
+    pub fn new(goal: (F, F), tracking: bool) -> Self {
+        FloatPlanner {
+            math: core::marker::PhantomData,
+            goal,
+            memory: heapless::Vec::new(),
+            following: false,
+            paper_step: c(RANGE),
+            last_mm: [F::zero(); SENSOR_COUNT],
+            track: tracking,
+            margin: F::infinity(),
+        }
+    }
+
+    fn near(&mut self, v: F, threshold: F) {
+        if self.track {
+            self.margin = self.margin.min((v - threshold).abs());
+        }
+    }
+
+    /// Sensor `i`'s reading of `raw`, interpolating the same calibration
+    /// bins as the fixed planner.
+    pub fn reading(cfg: &Config, i: usize, raw: u16) -> R<F> {
+        let Some(cal) = cfg.calibration(i) else {
+            return R::Implausible;
+        };
+        let (far, near) = cal.window();
+        if raw > cal.full_scale() {
+            return R::Implausible;
+        }
+        if raw > near {
+            return R::TooClose;
+        }
+        if raw < far {
+            return R::Clear;
+        }
+        let w = 1u32 << cal.shift();
+        let k = (raw as u32 / w) as usize;
+        // Integers convert straight to F (no f64 on the way: the f32 build
+        // must not pull in double-precision routines).
+        let int = |v: u32| F::from(v).unwrap_or_else(F::zero);
+        let f: F = int(raw as u32 % w) / int(w);
+        let mut bins = cal.bins().skip(k);
+        let d0 = bins.next().map_or(0, |b| b.1 as u32);
+        let d1 = bins.next().map_or(d0, |b| b.1 as u32);
+        R::Range(int(d0) + f * (int(d1) - int(d0)))
+    }
+
+    /// One cycle at pose (`x`, `y` mm, `h` rad) with raw counts: (heading
+    /// rad, step mm, status).
+    pub fn step(&mut self, cfg: &Config, x: F, y: F, h: F, raw: &[u16; 5]) -> (F, F, Status) {
+        let mut rd = [R::Clear; 5];
+        for (i, r) in rd.iter_mut().enumerate() {
+            *r = Self::reading(cfg, i, raw[i]);
+        }
+        let (n150, big) = (c::<F>(150.0), c::<F>(65_535.0));
+        // Fold-back filter.
+        for i in 0..5 {
+            let now = match rd[i] {
+                R::Range(mm) => mm,
+                R::Clear => big,
+                _ => F::zero(),
+            };
+            let last = self.last_mm[i];
+            if last != F::zero() {
+                self.near(last, n150);
+            }
+            let two = c::<F>(2.0);
+            if last != F::zero() && last <= n150 {
+                self.near(now, two * last);
+            }
+            let suspect = last != F::zero() && last <= n150 && now > two * last;
+            self.last_mm[i] = if now == F::zero() { F::one() } else { now };
+            if suspect {
+                rd[i] = R::TooClose;
+            }
+        }
+        if rd.contains(&R::Implausible) {
+            return (h, F::zero(), Status::SensorFault);
+        }
+        let (gx, gy) = (self.goal.0 - x, self.goal.1 - y);
+        let gd = M::hypot(gx, gy);
+        self.near(gd, c(TOL_GOAL));
+        if gd <= c(TOL_GOAL) {
+            return (h, F::zero(), Status::Arrived);
+        }
+        let bearing = M::atan2(gy, gx);
+        self.near(gd, c(RANGE));
+        let near = gd < c(RANGE);
+        let (radius, offset) = (c::<F>(RADIUS), c::<F>(OFFSET));
+        let rs = radius + c(CLEARANCE);
+        // Collision points (eqs. 7, 8).
+        let mut pts: heapless::Vec<(usize, F), 5> = heapless::Vec::new();
+        for i in 0..5 {
+            let d = match rd[i] {
+                R::Range(mm) => offset + mm,
+                R::TooClose => offset,
+                _ => continue,
+            };
+            let a = c::<F>(ANGLES[i]).to_radians();
+            let lat = d * M::sin(a).abs();
+            let fwd = d * M::cos(a);
+            self.near(lat, rs);
+            self.near(fwd, self.paper_step);
+            if lat <= rs && fwd <= self.paper_step {
+                let _ = pts.push((i, d));
+            }
+        }
+        // Memory (eqs. 11-13).
+        let hd = wrap(h).to_degrees();
+        let n90 = c::<F>(90.0);
+        let within = hd - n90 * (hd / n90).floor();
+        let (n45, n5) = (c::<F>(45.0), c::<F>(5.0));
+        self.near((within - n45).abs(), n5);
+        let class = if (within - n45).abs() <= n5 {
+            2
+        } else if M::cos(h).abs() > M::sin(h).abs() {
+            0
+        } else {
+            1
+        };
+        let between = |v: F, a: F, b: F| v >= a.min(b) && v <= a.max(b);
+        let n60 = c::<F>(60.0);
+        for &(i, d) in pts.iter() {
+            let a = h + c::<F>(ANGLES[i]).to_radians();
+            let p = (x + d * M::cos(a), y + d * M::sin(a));
+            let (ix, iy) = (between(p.0, x, self.goal.0), between(p.1, y, self.goal.1));
+            self.near(p.0, x);
+            self.near(p.0, self.goal.0);
+            self.near(p.1, y);
+            self.near(p.1, self.goal.1);
+            let active = match class {
+                0 => ix,
+                1 => iy,
+                _ => ix && iy,
+            };
+            let dup = self
+                .memory
+                .iter()
+                .any(|(q, k)| *k == class && (q.0 - p.0).abs() < n60 && (q.1 - p.1).abs() < n60);
+            if self.track {
+                let mut m = F::infinity();
+                for (q, k) in self.memory.iter() {
+                    if *k == class {
+                        m = m
+                            .min(((q.0 - p.0).abs() - n60).abs())
+                            .min(((q.1 - p.1).abs() - n60).abs());
+                    }
+                }
+                self.margin = self.margin.min(m);
+            }
+            if active && !dup {
+                if self.memory.is_full() {
+                    self.memory.remove(0);
+                }
+                let _ = self.memory.push((p, class));
+            }
+        }
+        // Motion class.
+        let delta = wrap(h - bearing).to_degrees();
+        self.near(delta.abs(), n5);
+        // Heading straight away from the goal: CW and CCW meet at ±180°.
+        self.near(delta.abs(), c(180.0));
+        let motion = if delta.abs() <= n5 {
+            0
+        } else if delta > F::zero() {
+            1
+        } else {
+            2
+        };
+        if motion == 0 {
+            self.following = false;
+        } else if !pts.is_empty() {
+            self.following = true;
+        }
+        // Forces (eq. 16).
+        let two = c::<F>(2.0);
+        let mut f = (two * M::cos(bearing), two * M::sin(bearing));
+        let (n91, million) = (c::<F>(91.0), c::<F>(1e6));
+        for &(i, d) in pts.iter() {
+            let a = h + c::<F>(ANGLES[i]).to_radians() + F::PI();
+            let m = million / (d.max(n91) * d.max(n91));
+            f.0 = f.0 + m * M::cos(a);
+            f.1 = f.1 + m * M::sin(a);
+        }
+        if !near {
+            let (mut sx, mut sy, mut n) = (F::zero(), F::zero(), 0);
+            if self.track {
+                let mut m = F::infinity();
+                for (q, _) in self.memory.iter() {
+                    m = m.min((q.0 - x).abs()).min((q.0 - self.goal.0).abs());
+                    m = m.min((q.1 - y).abs()).min((q.1 - self.goal.1).abs());
+                }
+                self.margin = self.margin.min(m);
+            }
+            for (q, k) in self.memory.iter() {
+                let (ix, iy) = (between(q.0, x, self.goal.0), between(q.1, y, self.goal.1));
+                let act = match k {
+                    0 => ix,
+                    1 => iy,
+                    _ => ix && iy,
+                };
+                if act {
+                    sx = sx + x - q.0;
+                    sy = sy + y - q.1;
+                    n += 1;
+                }
+            }
+            if n > 0 {
+                // The direction of Σ(P_R − P_i) is ill-conditioned when the
+                // points surround the rover: 1 mm moves it far.
+                self.near(M::hypot(sx, sy) / c(10.0), F::zero());
+            }
+            if n > 0 && (sx != F::zero() || sy != F::zero()) {
+                let a = M::atan2(sy, sx);
+                f.0 = f.0 + M::cos(a);
+                f.1 = f.1 + M::sin(a);
+            }
+            if self.following {
+                let group: &[usize] = match motion {
+                    1 => &[0, 1],
+                    2 => &[3, 4],
+                    _ => &[],
+                };
+                for &i in group {
+                    if rd[i] == R::Clear {
+                        let a = h + c::<F>(ANGLES[i]).to_radians();
+                        f.0 = f.0 + M::cos(a);
+                        f.1 = f.1 + M::sin(a);
+                    }
+                }
+            }
+        }
+        self.near(M::hypot(f.0, f.1), F::zero());
+        let mut heading = if f.0 == F::zero() && f.1 == F::zero() {
+            bearing
+        } else {
+            M::atan2(f.1, f.0)
+        };
+        let mut farthest: Option<F> = None;
+        for &(_, d) in pts.iter() {
+            let d = d - offset;
+            farthest = Some(farthest.map_or(d, |m| m.max(d)));
+        }
+        // The fixed planner keeps the paper step in whole mm.
+        self.paper_step = match farthest {
+            None => c(RANGE),
+            Some(d) => (d + two * radius).round(),
+        };
+        let half = c::<F>(40.0).to_radians();
+        let mut rel = wrap(heading - h);
+        self.near(rel.abs().to_degrees(), c(40.0));
+        if !pts.is_empty() && rel.abs() > half {
+            // Which edge: a force straight behind is a decision boundary.
+            self.near(rel.abs().to_degrees(), c(180.0));
+            rel = if rel < F::zero() { -half } else { half };
+            heading = h + rel;
+        }
+        let mut step = if rel.abs() > half {
+            F::zero()
+        } else {
+            self.paper_step.min(free::<F, M>(&rd, rel))
+        };
+        if near {
+            step = step.min(gd);
+        }
+        self.near(step, c(MIN_STEP));
+        if step < c(MIN_STEP) {
+            step = F::zero();
+        }
+        (wrap(heading), step, Status::Moving)
+    }
+}
+
+/// The safety rule in float: how far the disc may go along `rel`.
+pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> F {
+    let (offset, rs) = (c::<F>(OFFSET), c::<F>(RADIUS + CLEARANCE));
+    let reach = offset + c(RANGE);
+    let mut free = reach - rs;
+    for i in 0..5 {
+        let (e, obstacle) = match rd[i] {
+            R::Range(mm) => (offset + mm, true),
+            R::Clear => (reach, false),
+            _ => (offset, true),
+        };
+        let a = c::<F>(ANGLES[i]).to_radians() - rel;
+        let (along, lat) = (e * M::cos(a), e * M::sin(a));
+        if lat.abs() < rs {
+            let mut limit = along - M::sqrt(rs * rs - lat * lat);
+            if obstacle {
+                limit = limit.min(along - (offset + c(STANDOFF)));
+            }
+            free = free.min(limit.max(F::zero()));
+        }
+    }
+    free
+}
