@@ -13,9 +13,11 @@ fn reaches(rel: &str) {
         sc.name, run.outcome, run.seconds, run.steps, run.path_m, run.to_goal_m
     );
     assert_eq!(run.outcome, LoopOutcome::Reached, "{}", sc.name);
-    // Odometry error stays within the goal tolerance plus a few centimetres.
+    // The firmware stops when its odometry says it is within 50 mm; the
+    // true error adds the odometry drift (1 mm ticks, 0.43° heading steps),
+    // which reaches ~1 % of the distance driven: allow 0.25 m.
     assert!(
-        run.to_goal_m < 0.15,
+        run.to_goal_m < 0.25,
         "{}: {:.3} m from the goal",
         sc.name,
         run.to_goal_m
