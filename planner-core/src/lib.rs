@@ -23,7 +23,8 @@
 //! assert_eq!(out.command.step_mm, 780); // sensor reach minus the robot's disc
 //! ```
 //!
-//! Modules, one per concept of the papers: [`fixed`] (the fixed-point
+//! Modules, one per concept of the papers: [`apf`] (the classical
+//! baseline), [`fixed`] (the fixed-point
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
 //! points), [`escape`] (virtual obstacles), [`command`] (output and the
 //! safety rule), [`config`]; [`drive`] (odometry and the turn-then-advance
@@ -36,6 +37,7 @@
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]
 
+pub mod apf;
 pub mod command;
 pub mod config;
 pub mod drive;
@@ -127,11 +129,16 @@ impl Planner {
 
     /// Convert raw counts to readings with the per-sensor calibrations.
     pub fn readings(&self, raw: &RawCounts) -> Readings {
+        Planner::readings_with(&self.config, raw)
+    }
+
+    /// Raw counts to readings with `config`'s calibrations.
+    pub fn readings_with(config: &Config, raw: &RawCounts) -> Readings {
         let mut out = [Reading::Clear; SENSOR_COUNT];
         for ((o, &c), cal) in out
             .iter_mut()
             .zip(raw.iter())
-            .zip(self.config.calibration.iter())
+            .zip(config.calibration.iter())
         {
             *o = cal.reading(c);
         }

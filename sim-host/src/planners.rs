@@ -4,6 +4,7 @@
 
 use crate::geom::V2;
 use crate::scenario::Scenario;
+use planner_core::apf::{ApfConfig, ApfPlanner};
 use planner_core::fixed::Point;
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Pose, RawCounts, Status,
@@ -17,6 +18,8 @@ pub enum PlannerKind {
     Eapf,
     /// EAPF as the paper describes it, without the escape.
     EapfPlain,
+    /// Classical APF (Khatib), the baseline.
+    Apf,
 }
 
 impl PlannerKind {
@@ -25,6 +28,7 @@ impl PlannerKind {
         match self {
             PlannerKind::Eapf => "eapf",
             PlannerKind::EapfPlain => "eapf-plain",
+            PlannerKind::Apf => "apf",
         }
     }
 }
@@ -65,9 +69,15 @@ pub fn to_rad(a: Angle) -> f64 {
 /// active ones, virtual obstacles (centre, radius), virtual obstacles dropped.
 pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
 
+/// The core planner behind a [`SimPlanner`].
+enum Core {
+    Eapf(Box<Planner>),
+    Apf(Box<ApfPlanner>),
+}
+
 /// A planner under simulation.
 pub struct SimPlanner {
-    core: Planner,
+    core: Core,
 }
 
 impl SimPlanner {
@@ -84,19 +94,30 @@ impl SimPlanner {
             .build()
             .expect("the default configuration with a validated scenario radius is valid");
         let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
-        SimPlanner {
-            core: Planner::new(cfg, goal),
+        let core = match kind {
+            PlannerKind::Apf => {
+                Core::Apf(Box::new(ApfPlanner::new(cfg, ApfConfig::default(), goal)))
+            }
+            _ => Core::Eapf(Box::new(Planner::new(cfg, goal))),
+        };
+        SimPlanner { core }
+    }
+
+    fn config(&self) -> &planner_core::Config {
+        match &self.core {
+            Core::Eapf(p) => p.config(),
+            Core::Apf(p) => p.config(),
         }
     }
 
     /// Sensor angles, rad.
     pub fn sensor_angles_rad(&self) -> [f64; 5] {
-        self.core.config().sensor_angles().map(to_rad)
+        self.config().sensor_angles().map(to_rad)
     }
 
     /// Sensor face offset from the centre, m.
     pub fn sensor_offset_m(&self) -> f64 {
-        self.core.config().sensor_offset_mm() as f64 / 1000.0
+        self.config().sensor_offset_mm() as f64 / 1000.0
     }
 
     /// One cycle with odometry pose (`p`, `heading`) and raw counts.
@@ -105,7 +126,10 @@ impl SimPlanner {
             position: to_point(p),
             heading: to_angle(heading),
         };
-        let out = self.core.step_raw(pose, raw);
+        let out = match &mut self.core {
+            Core::Eapf(p) => p.step_raw(pose, raw),
+            Core::Apf(p) => p.step_raw(pose, raw),
+        };
         SimCommand {
             heading: to_rad(out.command.heading),
             step_m: out.command.step_mm as f64 / 1000.0,
@@ -116,34 +140,38 @@ impl SimPlanner {
     /// The guard: may the advance go on for `remaining_m`?
     pub fn guard(&self, raw: &RawCounts, remaining_m: f64) -> bool {
         let mm = (remaining_m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16;
-        self.core.guard_raw(raw, mm) == planner_core::Guard::Continue
+        let g = match &self.core {
+            Core::Eapf(p) => p.guard_raw(raw, mm),
+            Core::Apf(p) => p.guard_raw(raw, mm),
+        };
+        g == planner_core::Guard::Continue
     }
 
     /// Collision points of the last cycle, m.
     pub fn last_collision_points(&self) -> Vec<V2> {
-        self.core
-            .last_collision_points()
-            .iter()
-            .map(|&p| to_v2(p))
-            .collect()
+        match &self.core {
+            Core::Eapf(p) => p
+                .last_collision_points()
+                .iter()
+                .map(|&q| to_v2(q))
+                .collect(),
+            Core::Apf(_) => Vec::new(),
+        }
     }
 
     /// (remembered points, midpoint of the active ones with the robot at
     /// `robot`, virtual obstacles, virtual obstacles dropped in all).
     pub fn diagnostics(&self, robot: V2) -> Diagnostics {
-        let rem = self.core.memory().iter().map(|r| to_v2(r.point)).collect();
-        let mid = self
-            .core
+        let Core::Eapf(core) = &self.core else {
+            return (Vec::new(), None, Vec::new(), 0);
+        };
+        let rem = core.memory().iter().map(|r| to_v2(r.point)).collect();
+        let mid = core
             .memory()
-            .midpoint(to_point(robot), self.core.goal())
+            .midpoint(to_point(robot), core.goal())
             .map(to_v2);
-        let vr = self.core.config().escape().radius_mm as f64 / 1000.0;
-        let vos = self
-            .core
-            .escape()
-            .obstacles()
-            .map(|&p| (to_v2(p), vr))
-            .collect();
-        (rem, mid, vos, self.core.escape().dropped() as usize)
+        let vr = core.config().escape().radius_mm as f64 / 1000.0;
+        let vos = core.escape().obstacles().map(|&p| (to_v2(p), vr)).collect();
+        (rem, mid, vos, core.escape().dropped() as usize)
     }
 }

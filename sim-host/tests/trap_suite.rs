@@ -69,3 +69,29 @@ fn bad_scenario_is_rejected_before_running() {
     assert!(e.to_string().contains("bad.toml"));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// The classical APF baseline shows the failures the papers report: it
+/// reaches a world without a local minimum but not the U-trap or the two
+/// obstacles side by side (it loops in front of them until the time-out).
+#[test]
+fn classical_apf_fails_where_the_papers_say() {
+    use sim_host::planners::PlannerKind;
+    let cfg = SimConfig {
+        planner: PlannerKind::Apf,
+        max_steps: 600,
+        ..SimConfig::default()
+    };
+    let files: Vec<PathBuf> = [
+        "paper/env1-ex2.toml",
+        "traps/u-trap.toml",
+        "traps/two-obstacles.toml",
+    ]
+    .iter()
+    .map(|f| library().join(f))
+    .collect();
+    let rows = run_all(&files, &cfg, false).unwrap();
+    let outcome = |name: &str| rows.iter().find(|r| r.name == name).unwrap().outcome;
+    assert_eq!(outcome("env1-ex2"), Outcome::Reached);
+    assert_ne!(outcome("u-trap"), Outcome::Reached);
+    assert_ne!(outcome("two-obstacles"), Outcome::Reached);
+}
