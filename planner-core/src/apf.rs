@@ -102,13 +102,7 @@ impl ApfPlanner {
     /// One cycle from raw counts.
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
         let readings = Planner::readings_with(&self.config, raw);
-        let stop = |status| Output {
-            command: Command {
-                heading: pose.heading,
-                step_mm: 0,
-            },
-            status,
-        };
+        let stop = |status| Output::stop(pose.heading, status);
         if readings.contains(&Reading::Implausible) {
             return stop(Status::SensorFault);
         }

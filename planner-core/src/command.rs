@@ -68,6 +68,19 @@ pub struct Output {
     pub status: Status,
 }
 
+impl Output {
+    /// Stay put, facing `heading`, with `status`.
+    pub fn stop(heading: Angle, status: Status) -> Output {
+        Output {
+            command: Command {
+                heading,
+                step_mm: 0,
+            },
+            status,
+        }
+    }
+}
+
 /// The guard's answer during an advance.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]

@@ -158,13 +158,7 @@ impl Planner {
         self.fold_back.apply(&mut readings);
         self.last_readings = readings;
         self.last_points.clear();
-        let stop = |status| Output {
-            command: Command {
-                heading: pose.heading,
-                step_mm: 0,
-            },
-            status,
-        };
+        let stop = |status| Output::stop(pose.heading, status);
         if readings.contains(&Reading::Implausible) {
             return stop(Status::SensorFault);
         }
