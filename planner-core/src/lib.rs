@@ -27,7 +27,8 @@
 //! baseline), [`fixed`] (the fixed-point
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
 //! points), [`escape`] (virtual obstacles), [`command`] (output and the
-//! safety rule), [`config`]; [`drive`] (odometry and the turn-then-advance
+//! safety rule), [`config`]; [`liquid`] (the liquid-movement planner over a
+//! known map); [`drive`] (odometry and the turn-then-advance
 //! executor the firmwares share), [`protocol`] (their serial command lines).
 //!
 //! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
@@ -44,6 +45,7 @@ pub mod drive;
 pub mod escape;
 pub mod fixed;
 pub mod forces;
+pub mod liquid;
 pub mod memory;
 pub mod protocol;
 pub mod sensors;

@@ -20,15 +20,27 @@ pub enum PlannerKind {
     EapfPlain,
     /// Classical APF (Khatib), the baseline.
     Apf,
+    /// The liquid-movement planner over the known map, offline (restart
+    /// from the start after each virtual obstacle).
+    Liquid,
+    /// The same, online (go on from the local minimum).
+    LiquidOnline,
 }
 
 impl PlannerKind {
+    /// Does it plan over the scenario's map instead of sensing?
+    pub fn uses_map(self) -> bool {
+        matches!(self, PlannerKind::Liquid | PlannerKind::LiquidOnline)
+    }
+
     /// The `--planner` name.
     pub fn name(self) -> &'static str {
         match self {
             PlannerKind::Eapf => "eapf",
             PlannerKind::EapfPlain => "eapf-plain",
             PlannerKind::Apf => "apf",
+            PlannerKind::Liquid => "liquid",
+            PlannerKind::LiquidOnline => "liquid-online",
         }
     }
 }

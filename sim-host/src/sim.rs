@@ -4,7 +4,7 @@
 //! feeds the planner odometry (exact, or with seeded slip).
 
 use crate::geom::V2;
-use crate::planners::{PlannerKind, SimPlanner};
+use crate::planners::{to_point, to_v2, PlannerKind, SimPlanner};
 use crate::scenario::Scenario;
 use crate::sensor::{SensorMode, VirtualSensors};
 use crate::world::World;
@@ -127,6 +127,9 @@ fn wrap(a: f64) -> f64 {
 
 /// Run one scenario.
 pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult {
+    if cfg.planner.uses_map() {
+        return run_known_map(sc, cfg);
+    }
     let world = World::from_scenario(sc);
     let r = sc.robot_radius;
     let goal = V2::new(sc.goal[0], sc.goal[1]);
@@ -281,4 +284,136 @@ pub fn trace_csv(rows: &[TraceRow]) -> String {
         ));
     }
     s
+}
+
+/// The host's plan buffers: 16,384 waypoints, 4,096 virtual obstacles.
+pub type HostPlan = planner_core::liquid::Plan<16_384, 4_096>;
+
+/// Plan a scenario with the liquid-movement planner over its static map
+/// (circles, polygons, bounds), offline (`restart`) or online.
+pub fn plan_known_map(
+    sc: &Scenario,
+    restart: bool,
+) -> Result<Box<HostPlan>, planner_core::liquid::LiquidError> {
+    use planner_core::liquid::{plan, Circle, LiquidConfig, Map};
+    let world = World::from_scenario(sc);
+    let mm = |v: f64| (v * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
+    let circles: Vec<Circle> = world
+        .circles
+        .iter()
+        .map(|&(c, r)| Circle {
+            center: to_point(c),
+            radius_mm: (r * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16,
+        })
+        .collect();
+    let polys: Vec<Vec<planner_core::Point>> = world
+        .polygons
+        .iter()
+        .map(|p| p.iter().map(|&q| to_point(q)).collect())
+        .collect();
+    let poly_refs: Vec<&[planner_core::Point]> = polys.iter().map(|p| p.as_slice()).collect();
+    let [x0, y0, x1, y1] = world.bounds;
+    let map = Map {
+        min: planner_core::Point::new(mm(x0), mm(y0)),
+        max: planner_core::Point::new(mm(x1), mm(y1)),
+        circles: &circles,
+        polygons: &poly_refs,
+    };
+    let mut lc = LiquidConfig::paper(restart);
+    lc.robot_radius_mm = (sc.robot_radius * 1000.0).round().clamp(20.0, 1000.0) as u16;
+    let start = to_point(V2::new(sc.start[0], sc.start[1]));
+    let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
+    plan(&map, &lc, start, goal).map(Box::new)
+}
+
+/// A map planner (`liquid`, `liquid-online`): plan over the scenario's
+/// static obstacles with planner-core's `liquid` module, then drive the
+/// waypoints (turn, then advance in pieces of at most 1 cm, checking the
+/// swept disc against the world, moving obstacles included).
+fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
+    let world = World::from_scenario(sc);
+    let start = V2::new(sc.start[0], sc.start[1]);
+    let r = sc.robot_radius;
+    let mut p = start;
+    let mut heading = sc.start_heading_rad();
+    let mut t = 0.0;
+    let mut trace = vec![TraceRow {
+        t,
+        x: p.x,
+        y: p.y,
+        heading,
+    }];
+    let mut length = 0.0;
+    let mut min_clear = world.clearance(p, 0.0) - r;
+    let result = plan_known_map(sc, cfg.planner == PlannerKind::Liquid);
+    if std::env::var_os("SIM_DEBUG").is_some() {
+        match &result {
+            Ok(p) => eprintln!(
+                "liquid: {} waypoints, {} virtual obstacles, {} computation steps",
+                p.waypoints.len(),
+                p.virtual_obstacles.len(),
+                p.computation_steps
+            ),
+            Err(e) => eprintln!("liquid: {e:?}"),
+        }
+    }
+    let (outcome, steps, vos) = match &result {
+        Err(_) => (Outcome::Unreachable, 0, Vec::new()),
+        Ok(plan) => {
+            let mut outcome = Outcome::Reached;
+            'drive: for w in plan.waypoints.iter().skip(1) {
+                let q = to_v2(*w);
+                let d = p.dist(q);
+                if d < 1e-9 {
+                    continue;
+                }
+                let h = (q.y - p.y).atan2(q.x - p.x);
+                t += wrap(h - heading).abs() / cfg.turn_rate;
+                heading = h;
+                let n = (d / 0.01).ceil() as usize;
+                for k in 1..=n {
+                    let b = p + (q - p) * (k as f64 / n as f64);
+                    let a = trace.last().map(|row| V2::new(row.x, row.y)).unwrap_or(p);
+                    let t1 = t + a.dist(b) / cfg.speed;
+                    let c = world
+                        .static_sweep_clearance(a, b)
+                        .min(world.moving_sweep_clearance(a, b, t, t1));
+                    min_clear = min_clear.min(c - r);
+                    length += a.dist(b);
+                    t = t1;
+                    trace.push(TraceRow {
+                        t,
+                        x: b.x,
+                        y: b.y,
+                        heading,
+                    });
+                    if c <= r {
+                        outcome = Outcome::Collision;
+                        break 'drive;
+                    }
+                }
+                p = q;
+            }
+            let vos = plan
+                .virtual_obstacles
+                .iter()
+                .map(|&v| (to_v2(v), 0.03))
+                .collect();
+            (outcome, plan.computation_steps as usize, vos)
+        }
+    };
+    let dropped = result.as_ref().map_or(0, |p| p.virtual_obstacles.len());
+    RunResult {
+        outcome,
+        steps,
+        path_length: length,
+        min_clearance: min_clear,
+        trace,
+        seen: Vec::new(),
+        remembered: Vec::new(),
+        midpoint: None,
+        virtual_obstacles: vos,
+        virtual_dropped: dropped,
+        sensor_faults: 0,
+    }
 }
