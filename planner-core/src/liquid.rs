@@ -141,14 +141,18 @@ pub fn potential(map: &Map, cfg: &LiquidConfig, virtuals: &[Point], goal: Point,
     }
     // One paper length unit in mm (≥ 1).
     let unit = (cfg.step_mm as u64 / 10).max(1);
-    let mut p = cfg.k_target as u64 * x.distance_mm(goal) as u64 * SCALE / unit;
+    // (`checked_div` here and below: no panicking path, though every
+    // divisor is known to be positive.)
+    let mut p = (cfg.k_target as u64 * x.distance_mm(goal) as u64 * SCALE)
+        .checked_div(unit)
+        .unwrap_or(INFINITE);
     // K / (r/unit)² = K · unit² / r², in 1/SCALE.
     let inverse_square = |k: u32, r: i32| -> Option<u64> {
         if r <= 0 {
             None
         } else {
             let r = r as u64;
-            Some(k as u64 * unit * unit * SCALE / (r * r))
+            (k as u64 * unit * unit * SCALE).checked_div(r * r)
         }
     };
     for c in map.circles {
@@ -216,8 +220,8 @@ fn segment_distance(a: Point, b: Point, x: Point) -> u16 {
         return b.distance_mm(x);
     }
     // Foot of the perpendicular: a + ab·dot/len2.
-    let fx = a.x as i64 + abx as i64 * dot / len2;
-    let fy = a.y as i64 + aby as i64 * dot / len2;
+    let fx = a.x as i64 + (abx as i64 * dot).checked_div(len2).unwrap_or(0);
+    let fy = a.y as i64 + (aby as i64 * dot).checked_div(len2).unwrap_or(0);
     hypot((x.x as i64 - fx) as i32, (x.y as i64 - fy) as i32)
 }
 
@@ -260,7 +264,7 @@ pub fn plan<const W: usize, const V: usize>(
         let here = potential(map, cfg, &out.virtual_obstacles, goal, x);
         let mut best: Option<(u64, Point)> = None;
         for k in 0..cfg.headings as u32 {
-            let dir = Angle((k * 65_536 / cfg.headings as u32) as u16);
+            let dir = Angle(((k * 65_536).checked_div(cfg.headings as u32).unwrap_or(0)) as u16);
             let y = x.offset(dir, cfg.step_mm);
             let p = potential(map, cfg, &out.virtual_obstacles, goal, y);
             if p == INFINITE || !move_is_free(map, cfg, x, y) {
