@@ -120,6 +120,51 @@ pub struct RunResult {
     pub sensor_faults: usize,
 }
 
+/// The true motion of a run: trace rows, driven length, smallest clearance.
+struct Track {
+    trace: Vec<TraceRow>,
+    length: f64,
+    min_clear: f64,
+}
+
+impl Track {
+    /// Standing at `p`.
+    fn new(world: &World, p: V2, heading: f64, r: f64) -> Track {
+        Track {
+            trace: vec![TraceRow {
+                t: 0.0,
+                x: p.x,
+                y: p.y,
+                heading,
+            }],
+            length: 0.0,
+            min_clear: world.clearance(p, 0.0) - r,
+        }
+    }
+
+    /// A trace row.
+    fn row(&mut self, t: f64, p: V2, heading: f64) {
+        self.trace.push(TraceRow {
+            t,
+            x: p.x,
+            y: p.y,
+            heading,
+        });
+    }
+
+    /// The disc of radius `r` moves `a → b` during `[t0, t1]`: the smallest
+    /// clearance of the sweep to anything (at most `r`: a collision).
+    fn piece(&mut self, world: &World, a: V2, b: V2, t: (f64, f64), heading: f64, r: f64) -> f64 {
+        let c = world
+            .static_sweep_clearance(a, b)
+            .min(world.moving_sweep_clearance(a, b, t.0, t.1));
+        self.min_clear = self.min_clear.min(c - r);
+        self.length += a.dist(b);
+        self.row(t.1, b, heading);
+        c
+    }
+}
+
 fn wrap(a: f64) -> f64 {
     let t = std::f64::consts::TAU;
     (a + std::f64::consts::PI).rem_euclid(t) - std::f64::consts::PI
@@ -150,14 +195,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     // Odometry: what the planner believes.
     let (mut op, mut oh) = (p, heading);
     let mut t = 0.0;
-    let mut trace = vec![TraceRow {
-        t,
-        x: p.x,
-        y: p.y,
-        heading,
-    }];
-    let mut length = 0.0;
-    let mut min_clear = world.clearance(p, 0.0) - r;
+    let mut track = Track::new(&world, p, heading, r);
     let straight = p.dist(goal);
     // Without a reference (unsolvable, or no grid path) the planner must
     // give up by itself: allow it a longer drive to do so.
@@ -212,12 +250,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         heading = wrap(heading + true_turn);
         oh = out.heading;
         if dturn != 0.0 {
-            trace.push(TraceRow {
-                t,
-                x: p.x,
-                y: p.y,
-                heading,
-            });
+            track.row(t, p, heading);
         }
         // Advance in pieces of at most 1 cm, calling the guard each piece.
         let step = out.step_m;
@@ -230,26 +263,16 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             }
             let q = p + V2::from_angle(heading) * true_piece;
             let t1 = t + piece / cfg.speed;
-            let c = world
-                .static_sweep_clearance(p, q)
-                .min(world.moving_sweep_clearance(p, q, t, t1));
-            min_clear = min_clear.min(c - r);
-            length += true_piece;
+            let c = track.piece(&world, p, q, (t, t1), heading, r);
             p = q;
             t = t1;
             op = op + V2::from_angle(oh) * piece;
             done += piece;
-            trace.push(TraceRow {
-                t,
-                x: p.x,
-                y: p.y,
-                heading,
-            });
             if c <= r {
                 outcome = Outcome::Collision;
                 break 'run;
             }
-            if length > budget {
+            if track.length > budget {
                 break 'run;
             }
             let raw = sensors.read(&world, p, heading, t);
@@ -262,9 +285,9 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     RunResult {
         outcome,
         steps,
-        path_length: length,
-        min_clearance: min_clear,
-        trace,
+        path_length: track.length,
+        min_clearance: track.min_clear,
+        trace: track.trace,
         seen,
         remembered,
         midpoint,
@@ -337,14 +360,7 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
     let mut p = start;
     let mut heading = sc.start_heading_rad();
     let mut t = 0.0;
-    let mut trace = vec![TraceRow {
-        t,
-        x: p.x,
-        y: p.y,
-        heading,
-    }];
-    let mut length = 0.0;
-    let mut min_clear = world.clearance(p, 0.0) - r;
+    let mut track = Track::new(&world, p, heading, r);
     let result = plan_known_map(sc, cfg.planner == PlannerKind::Liquid);
     if std::env::var_os("SIM_DEBUG").is_some() {
         match &result {
@@ -371,22 +387,13 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
                 t += wrap(h - heading).abs() / cfg.turn_rate;
                 heading = h;
                 let n = (d / 0.01).ceil() as usize;
+                let mut a = p;
                 for k in 1..=n {
                     let b = p + (q - p) * (k as f64 / n as f64);
-                    let a = trace.last().map(|row| V2::new(row.x, row.y)).unwrap_or(p);
                     let t1 = t + a.dist(b) / cfg.speed;
-                    let c = world
-                        .static_sweep_clearance(a, b)
-                        .min(world.moving_sweep_clearance(a, b, t, t1));
-                    min_clear = min_clear.min(c - r);
-                    length += a.dist(b);
+                    let c = track.piece(&world, a, b, (t, t1), heading, r);
                     t = t1;
-                    trace.push(TraceRow {
-                        t,
-                        x: b.x,
-                        y: b.y,
-                        heading,
-                    });
+                    a = b;
                     if c <= r {
                         outcome = Outcome::Collision;
                         break 'drive;
@@ -406,9 +413,9 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
     RunResult {
         outcome,
         steps,
-        path_length: length,
-        min_clearance: min_clear,
-        trace,
+        path_length: track.length,
+        min_clearance: track.min_clear,
+        trace: track.trace,
         seen: Vec::new(),
         remembered: Vec::new(),
         midpoint: None,
