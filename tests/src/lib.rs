@@ -89,17 +89,20 @@ pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace 
 }
 
 /// The traces the firmware checks replay: a trap, a paper world, a dense
-/// world; each long enough to fill the collision memory.
+/// world, each long enough to fill the collision memory, and a dead end
+/// where the escape drops virtual obstacles (15 by the end), whose forces
+/// make the most expensive steps.
 pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
     [
-        "traps/u-trap.toml",
-        "paper/env1-ex1.toml",
-        "traps/comb.toml",
-        "paper/env2-ex1.toml",
+        ("traps/u-trap.toml", 120),
+        ("paper/env1-ex1.toml", 120),
+        ("traps/comb.toml", 120),
+        ("paper/env2-ex1.toml", 120),
+        ("traps/dead-end.toml", 200),
     ]
     .iter()
     .enumerate()
-    .map(|(i, rel)| record(&scenario(rel), adc, 120, 7 + i as u64))
+    .map(|(i, &(rel, steps))| record(&scenario(rel), adc, steps, 7 + i as u64))
     .collect()
 }
 
