@@ -59,8 +59,9 @@ pub struct SimConfig {
     pub slip: Option<(f64, f64)>,
     /// Budget: planner cycles.
     pub max_steps: usize,
-    /// Budget: driven length as a multiple of the reference plus 5 m (three
-    /// times that multiple of the straight line plus 10 m without one).
+    /// Budget: driven length as a multiple of the reference plus 5 m
+    /// (without a reference: five times that multiple of the straight line
+    /// plus 10 m, room for a planner to find out by itself).
     pub max_length_ratio: f64,
 }
 
@@ -201,7 +202,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     // give up by itself: allow it a longer drive to do so.
     let budget = match reference {
         Some(l) => cfg.max_length_ratio * l + 5.0,
-        None => 3.0 * cfg.max_length_ratio * straight + 10.0,
+        None => 5.0 * cfg.max_length_ratio * straight + 10.0,
     };
     let mut seen: Vec<V2> = Vec::new();
     let mut faults = 0;
