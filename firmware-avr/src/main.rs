@@ -35,7 +35,8 @@ use ufmt::uwriteln;
 /// How often the guard checks the way ahead during an advance, ms.
 const GUARD_PERIOD_MS: u32 = 4;
 
-/// Goal set at build time, `"x_mm y_mm"` (optional; `G` over serial otherwise).
+/// Goal set at build time, a command line such as `"G 2000 1500"` (optional;
+/// `G` over serial otherwise).
 const BUILD_GOAL: Option<&str> = option_env!("ROVER_GOAL");
 
 #[panic_handler]
@@ -130,16 +131,13 @@ fn main() -> ! {
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());
     let mut driving = false;
-    if let Some(Request::Goal(x, y)) = BUILD_GOAL
-        .map(str::as_bytes)
-        .and_then(|g| protocol::parse(&[b"G ", g].concat_small()))
-    {
+    if let Some(Request::Goal(x, y)) = BUILD_GOAL.and_then(|g| protocol::parse(g.as_bytes())) {
         planner.set_goal(Point::new(x, y));
         driving = true;
     }
     let _ = uwriteln!(out, "READY");
 
-    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    let mut lines = protocol::LineReader::new();
     let mut last_ms = clock::millis();
     let mut last_sweep = adc::sweeps().wrapping_sub(1);
     let mut last_guard_ms = last_ms.wrapping_sub(GUARD_PERIOD_MS);
@@ -147,15 +145,9 @@ fn main() -> ! {
         avr_device::asm::wdr();
         // Commands.
         while let Some(b) = serial::read() {
-            if b != b'\n' {
-                if line.push(b).is_err() {
-                    line.clear(); // overlong: dropped, reported at its end
-                    let _ = line.push(b'!');
-                }
+            let Some(req) = lines.feed(b) else {
                 continue;
-            }
-            let req = protocol::parse(&line);
-            line.clear();
+            };
             match req {
                 Some(Request::Goal(x, y)) => {
                     planner.set_goal(Point::new(x, y));
@@ -241,22 +233,5 @@ fn main() -> ! {
             }
         });
         motors::set(&dp, wheels);
-    }
-}
-
-/// `[a, b].concat()` into a small fixed buffer (no allocator here).
-trait ConcatSmall {
-    fn concat_small(&self) -> heapless::Vec<u8, 24>;
-}
-
-impl ConcatSmall for [&[u8]; 2] {
-    fn concat_small(&self) -> heapless::Vec<u8, 24> {
-        let mut v = heapless::Vec::new();
-        for part in self {
-            for &b in *part {
-                let _ = v.push(b);
-            }
-        }
-        v
     }
 }

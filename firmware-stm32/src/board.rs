@@ -102,7 +102,7 @@ pub fn run() -> ! {
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());
     let mut driving = false;
-    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    let mut lines = protocol::LineReader::new();
     let mut ms: u32 = 0;
     defmt::info!("ready");
     let _ = tx.write_str("READY\n");
@@ -110,14 +110,10 @@ pub fn run() -> ! {
     loop {
         watchdog.feed();
         while let Ok(b) = rx.read() {
-            if b != b'\n' {
-                if line.push(b).is_err() {
-                    line.clear();
-                    let _ = line.push(b'!');
-                }
+            let Some(req) = lines.feed(b) else {
                 continue;
-            }
-            let reply = match protocol::parse(&line) {
+            };
+            let reply = match req {
                 Some(Request::Goal(x, y)) => {
                     planner.set_goal(Point::new(x, y));
                     executor.halt();
@@ -138,7 +134,6 @@ pub fn run() -> ! {
                 }
                 _ => "ERR\n",
             };
-            line.clear();
             let _ = tx.write_str(reply);
         }
 

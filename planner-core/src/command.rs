@@ -147,6 +147,8 @@ pub fn guard(cfg: &Config, readings: &Readings, remaining_mm: u16) -> Guard {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::config::ConfigBuilder;
+    use crate::sensors::{AdcProfile, SENSOR_COUNT};
 
     #[test]
     fn status_codes_round_trip() {
@@ -160,8 +162,6 @@ mod tests {
         }
         assert_eq!(Status::from_code(4), None);
     }
-    use crate::config::ConfigBuilder;
-    use crate::sensors::{AdcProfile, SENSOR_COUNT};
 
     fn cfg() -> Config {
         ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)

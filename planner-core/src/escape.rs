@@ -198,11 +198,10 @@ impl Escape {
             self.crumbs.clear();
         }
         self.drops_since_best = self.drops_since_best.saturating_add(1);
-        let v = robot;
         if self.obstacles.is_full() {
             self.obstacles.pop_front();
         }
-        let _ = self.obstacles.push_back(v);
+        let _ = self.obstacles.push_back(robot);
         self.dropped = self.dropped.saturating_add(1);
         Verdict::Dropped
     }

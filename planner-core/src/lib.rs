@@ -356,7 +356,11 @@ mod tests {
         // reverses, so the rover turns to the sector's edge (±40°) instead,
         // keeping the obstacle in view, and may step along it if free.
         assert_eq!(out.command.heading.abs_signed(), Angle::from_deg(40).0);
-        assert!(out.command.step_mm <= 780);
+        // Along ±40° the obstacle lies 400·sin 40° = 257 mm to the side,
+        // outside the corridor, and every other beam is clear: the step is
+        // the paper's, the detection plus the robot's width (2 × 100 mm).
+        let seen_mm = cal.reading(c300).range_mm().unwrap();
+        assert_eq!(out.command.step_mm, seen_mm + 200);
         assert_eq!(p.last_collision_points().len(), 1);
         assert_eq!(p.memory().len(), 1);
     }

@@ -129,61 +129,70 @@ const INFINITE: u64 = u64::MAX;
 /// Fixed-point scale of the potential.
 const SCALE: u64 = 1 << 16;
 
-/// The potential at `x` (paper §3), in units of `1/SCALE`.
+/// The potential at `x` (paper §3), in units of `1/SCALE`; [`INFINITE`]
+/// inside an (inflated) obstacle, a virtual obstacle or out of bounds.
 pub fn potential(map: &Map, cfg: &LiquidConfig, virtuals: &[Point], goal: Point, x: Point) -> u64 {
+    potential_parts(map, cfg, virtuals, goal, x).unwrap_or(INFINITE)
+}
+
+fn potential_parts(
+    map: &Map,
+    cfg: &LiquidConfig,
+    virtuals: &[Point],
+    goal: Point,
+    x: Point,
+) -> Option<u64> {
+    let unit = unit_mm(cfg);
+    // (`checked_div` here and below: no panicking path, though every
+    // divisor is known to be positive.)
+    let mut p = (cfg.k_target as u64 * x.distance_mm(goal) as u64 * SCALE).checked_div(unit)?;
+    p = p.saturating_add(obstacle_potential(map, cfg, x)?);
+    for v in virtuals {
+        let r = x.distance_mm(*v) as i32 - cfg.virtual_radius_mm as i32;
+        p = p.saturating_add(inverse_square(cfg.k_virtual, r, unit)?);
+    }
+    Some(p)
+}
+
+/// One paper length unit in mm (≥ 1).
+fn unit_mm(cfg: &LiquidConfig) -> u64 {
+    (cfg.step_mm as u64 / 10).max(1)
+}
+
+/// `K / (r/unit)² = K · unit² / r²` in `1/SCALE`; `None` (infinite) for `r ≤ 0`.
+fn inverse_square(k: u32, r: i32, unit: u64) -> Option<u64> {
+    if r <= 0 {
+        return None;
+    }
+    let r = r as u64;
+    (k as u64 * unit * unit * SCALE).checked_div(r * r)
+}
+
+/// The obstacles' and the bounds' part of the potential at `x`; `None`
+/// inside an inflated obstacle or out of bounds.
+fn obstacle_potential(map: &Map, cfg: &LiquidConfig, x: Point) -> Option<u64> {
     let a_r = cfg.robot_radius_mm as i32;
     if (x.x as i32) < map.min.x as i32 + a_r
         || (x.y as i32) < map.min.y as i32 + a_r
         || (x.x as i32) > map.max.x as i32 - a_r
         || (x.y as i32) > map.max.y as i32 - a_r
     {
-        return INFINITE;
+        return None;
     }
-    // One paper length unit in mm (≥ 1).
-    let unit = (cfg.step_mm as u64 / 10).max(1);
-    // (`checked_div` here and below: no panicking path, though every
-    // divisor is known to be positive.)
-    let mut p = (cfg.k_target as u64 * x.distance_mm(goal) as u64 * SCALE)
-        .checked_div(unit)
-        .unwrap_or(INFINITE);
-    // K / (r/unit)² = K · unit² / r², in 1/SCALE.
-    let inverse_square = |k: u32, r: i32| -> Option<u64> {
-        if r <= 0 {
-            None
-        } else {
-            let r = r as u64;
-            (k as u64 * unit * unit * SCALE).checked_div(r * r)
-        }
-    };
+    let unit = unit_mm(cfg);
+    let mut p = 0u64;
     for c in map.circles {
         let r = x.distance_mm(c.center) as i32 - c.radius_mm as i32 - a_r;
-        p = p.saturating_add(match inverse_square(cfg.k_obstacle, r) {
-            Some(v) => v,
-            None => return INFINITE,
-        });
+        p = p.saturating_add(inverse_square(cfg.k_obstacle, r, unit)?);
     }
     for poly in map.polygons {
         let (inside, d) = polygon_distance(poly, x);
         if inside {
-            return INFINITE;
+            return None;
         }
-        p = p.saturating_add(match inverse_square(cfg.k_obstacle, d as i32 - a_r) {
-            Some(v) => v,
-            None => return INFINITE,
-        });
+        p = p.saturating_add(inverse_square(cfg.k_obstacle, d as i32 - a_r, unit)?);
     }
-    for v in virtuals {
-        p = p.saturating_add(
-            match inverse_square(
-                cfg.k_virtual,
-                x.distance_mm(*v) as i32 - cfg.virtual_radius_mm as i32,
-            ) {
-                Some(v) => v,
-                None => return INFINITE,
-            },
-        );
-    }
-    p
+    Some(p)
 }
 
 /// (inside, distance to the outline in mm) of a point and a polygon.
@@ -303,7 +312,7 @@ fn move_is_free(map: &Map, cfg: &LiquidConfig, x: Point, y: Point) -> bool {
     let (dx, dy) = x.to(y);
     (1..4).all(|q| {
         let m = Point::saturating(x.x as i32 + dx * q / 4, x.y as i32 + dy * q / 4);
-        potential(map, cfg, &[], y, m) != INFINITE
+        obstacle_potential(map, cfg, m).is_some()
     })
 }
 

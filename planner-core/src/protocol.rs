@@ -79,6 +79,42 @@ pub fn parse(line: &[u8]) -> Option<Request> {
     }
 }
 
+/// Longest command line, bytes.
+pub const LINE_CAPACITY: usize = 32;
+
+/// Gathers received bytes into lines and parses each.
+#[derive(Clone, Debug, Default)]
+pub struct LineReader {
+    line: heapless::Vec<u8, LINE_CAPACITY>,
+    overlong: bool,
+}
+
+impl LineReader {
+    /// An empty reader.
+    pub fn new() -> Self {
+        LineReader::default()
+    }
+
+    /// Take one byte. At the end of a line (`\n`): `Some` of what it says,
+    /// `Some(None)` for a line that is not a command (too long included).
+    pub fn feed(&mut self, b: u8) -> Option<Option<Request>> {
+        if b != b'\n' {
+            if self.line.push(b).is_err() {
+                self.overlong = true;
+            }
+            return None;
+        }
+        let req = if self.overlong {
+            None
+        } else {
+            parse(&self.line)
+        };
+        self.line.clear();
+        self.overlong = false;
+        Some(req)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,6 +126,31 @@ mod tests {
         assert_eq!(parse(b"S"), Some(Request::Stop));
         assert_eq!(parse(b"M"), Some(Request::Memory));
         assert_eq!(parse(b"R  10   20"), Some(Request::Replay(10, 20)));
+    }
+
+    #[test]
+    fn the_reader_parses_line_by_line_and_refuses_overlong_ones() {
+        let mut r = LineReader::new();
+        let mut got = heapless::Vec::<Option<Request>, 4>::new();
+        let long = [b'7'; 40];
+        for &b in b"G 10 20\nS\n"
+            .iter()
+            .chain(long.iter())
+            .chain(b"\nM\n".iter())
+        {
+            if let Some(req) = r.feed(b) {
+                got.push(req).unwrap();
+            }
+        }
+        assert_eq!(
+            got.as_slice(),
+            &[
+                Some(Request::Goal(10, 20)),
+                Some(Request::Stop),
+                None,
+                Some(Request::Memory)
+            ]
+        );
     }
 
     #[test]

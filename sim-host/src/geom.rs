@@ -145,6 +145,22 @@ pub fn point_in_polygon(p: V2, poly: &[V2]) -> bool {
     inside
 }
 
+/// A two-wheel rover at `p`, heading `h` (rad), wheels `vl`, `vr` (m/s)
+/// `base` apart (m), after `dt` seconds: the new position and heading,
+/// exact for constant wheel speeds (an arc, or a line when they are equal).
+pub fn differential_drive(p: V2, h: f64, vl: f64, vr: f64, base: f64, dt: f64) -> (V2, f64) {
+    let (v, w) = ((vl + vr) / 2.0, (vr - vl) / base);
+    if w.abs() < 1e-9 {
+        return (p + V2::from_angle(h) * (v * dt), h);
+    }
+    let r = v / w;
+    let q = V2::new(
+        p.x + r * ((h + w * dt).sin() - h.sin()),
+        p.y - r * ((h + w * dt).cos() - h.cos()),
+    );
+    (q, h + w * dt)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -184,5 +200,28 @@ mod tests {
         ];
         assert!(point_in_polygon(V2::new(0.5, 0.5), &sq));
         assert!(!point_in_polygon(V2::new(1.5, 0.5), &sq));
+    }
+
+    #[test]
+    fn differential_drive_by_hand() {
+        // Equal wheels: a straight line.
+        let (q, h) = differential_drive(V2::new(0.0, 0.0), 0.0, 0.2, 0.2, 0.13, 1.0);
+        assert!((q.x - 0.2).abs() < 1e-12 && q.y.abs() < 1e-12 && h == 0.0);
+        // Opposite wheels: a turn in place by (vr − vl)/base · dt.
+        let (q, h) = differential_drive(V2::new(1.0, 1.0), 0.0, -0.13, 0.13, 0.13, 0.5);
+        assert!(q.dist(V2::new(1.0, 1.0)) < 1e-12 && (h - 1.0).abs() < 1e-12);
+        // A quarter circle of radius 1 m: left wheel on the inside.
+        let b = 0.2;
+        let (vl, vr) = (1.0 - b / 2.0, 1.0 + b / 2.0); // ω = 1 rad/s, v = 1 m/s
+        let (q, h) = differential_drive(
+            V2::new(0.0, 0.0),
+            0.0,
+            vl,
+            vr,
+            b,
+            std::f64::consts::FRAC_PI_2,
+        );
+        assert!(q.dist(V2::new(1.0, 1.0)) < 1e-9, "{q:?}");
+        assert!((h - std::f64::consts::FRAC_PI_2).abs() < 1e-12);
     }
 }

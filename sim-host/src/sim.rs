@@ -164,6 +164,24 @@ impl Track {
         self.row(t.1, b, heading);
         c
     }
+
+    /// The result of a run that drove this track, without planner
+    /// diagnostics (the caller adds its own).
+    fn into_result(self, outcome: Outcome, steps: usize) -> RunResult {
+        RunResult {
+            outcome,
+            steps,
+            path_length: self.length,
+            min_clearance: self.min_clear,
+            trace: self.trace,
+            seen: Vec::new(),
+            remembered: Vec::new(),
+            midpoint: None,
+            virtual_obstacles: Vec::new(),
+            virtual_dropped: 0,
+            sensor_faults: 0,
+        }
+    }
 }
 
 fn wrap(a: f64) -> f64 {
@@ -284,17 +302,13 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     }
     let (remembered, midpoint, virtual_obstacles, virtual_dropped) = planner.diagnostics(op);
     RunResult {
-        outcome,
-        steps,
-        path_length: track.length,
-        min_clearance: track.min_clear,
-        trace: track.trace,
         seen,
         remembered,
         midpoint,
         virtual_obstacles,
         virtual_dropped,
         sensor_faults: faults,
+        ..track.into_result(outcome, steps)
     }
 }
 
@@ -319,8 +333,16 @@ pub fn plan_known_map(
     sc: &Scenario,
     restart: bool,
 ) -> Result<Box<HostPlan>, planner_core::liquid::LiquidError> {
+    plan_on(&World::from_scenario(sc), sc, restart)
+}
+
+/// [`plan_known_map`] on the scenario's world, already built.
+fn plan_on(
+    world: &World,
+    sc: &Scenario,
+    restart: bool,
+) -> Result<Box<HostPlan>, planner_core::liquid::LiquidError> {
     use planner_core::liquid::{plan, Circle, LiquidConfig, Map};
-    let world = World::from_scenario(sc);
     let mm = |v: f64| (v * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
     let circles: Vec<Circle> = world
         .circles
@@ -362,7 +384,7 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
     let mut heading = sc.start_heading_rad();
     let mut t = 0.0;
     let mut track = Track::new(&world, p, heading, r);
-    let result = plan_known_map(sc, cfg.planner == PlannerKind::Liquid);
+    let result = plan_on(&world, sc, cfg.planner == PlannerKind::Liquid);
     if std::env::var_os("SIM_DEBUG").is_some() {
         match &result {
             Ok(p) => eprintln!(
@@ -412,16 +434,8 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
     };
     let dropped = result.as_ref().map_or(0, |p| p.virtual_obstacles.len());
     RunResult {
-        outcome,
-        steps,
-        path_length: track.length,
-        min_clearance: track.min_clear,
-        trace: track.trace,
-        seen: Vec::new(),
-        remembered: Vec::new(),
-        midpoint: None,
         virtual_obstacles: vos,
         virtual_dropped: dropped,
-        sensor_faults: 0,
+        ..track.into_result(outcome, steps)
     }
 }

@@ -1,7 +1,7 @@
 //! The ATmega328P firmware in simavr (through avr-tester): build it, replay
 //! recorded traces through its planner, read its size.
 
-use crate::{repo_root, Frame};
+use crate::{clean_cargo, repo_root, Frame};
 use avr_tester::AvrTester;
 use planner_core::{Angle, Command, Output, Point, Status};
 use std::path::PathBuf;
@@ -12,26 +12,6 @@ use std::sync::Mutex;
 pub const F_CPU: u32 = 16_000_000;
 
 static BUILT: Mutex<Vec<(&'static str, PathBuf)>> = Mutex::new(Vec::new());
-
-/// A command for `cargo` in `dir` that uses that folder's own toolchain
-/// file and config, not the ones of the cargo that runs these tests.
-pub fn clean_cargo(dir: &std::path::Path) -> Cmd {
-    let mut c = Cmd::new("cargo");
-    c.current_dir(dir);
-    for (k, _) in std::env::vars_os() {
-        let k = k.to_string_lossy().to_string();
-        let inherited = k == "CARGO"
-            || (k.starts_with("CARGO_") && k != "CARGO_HOME")
-            || k.starts_with("RUSTC")
-            || k.starts_with("RUSTDOC")
-            || k == "RUSTUP_TOOLCHAIN"
-            || k == "RUSTFLAGS";
-        if inherited {
-            c.env_remove(&k);
-        }
-    }
-    c
-}
 
 /// Build one binary of firmware-avr (release) once per process.
 fn build(bin: &'static str, features: &[&str]) -> PathBuf {
@@ -289,23 +269,13 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
         let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
         let vl = dir_l as f64 * high_l as f64 / n as f64 * WHEEL_SPEED_MPS;
         let vr = dir_r as f64 * high_r as f64 / n as f64 * WHEEL_SPEED_MPS;
-        // Differential drive over dt, exact for constant wheel speeds.
-        let (v, w) = ((vl + vr) / 2.0, (vr - vl) / base);
-        let q = if w.abs() < 1e-9 {
-            p + V2::from_angle(h) * (v * dt)
-        } else {
-            let r = v / w;
-            V2::new(
-                p.x + r * ((h + w * dt).sin() - h.sin()),
-                p.y - r * ((h + w * dt).cos() - h.cos()),
-            )
-        };
+        let (q, h1) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
         if world.static_sweep_clearance(p, q) <= sc.robot_radius {
             break LoopOutcome::Collision;
         }
         path += p.dist(q);
         p = q;
-        h += w * dt;
+        h = h1;
         t += dt;
         // Encoder edges for the wheel travel (at most one per millisecond
         // per wheel at this speed).

@@ -22,6 +22,26 @@ pub fn repo_root() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
 }
 
+/// A command for `cargo` in `dir` that uses that folder's own toolchain
+/// file and config, not the ones of the cargo that runs these tests.
+pub fn clean_cargo(dir: &Path) -> std::process::Command {
+    let mut c = std::process::Command::new("cargo");
+    c.current_dir(dir);
+    for (k, _) in std::env::vars_os() {
+        let k = k.to_string_lossy().to_string();
+        let inherited = k == "CARGO"
+            || (k.starts_with("CARGO_") && k != "CARGO_HOME")
+            || k.starts_with("RUSTC")
+            || k.starts_with("RUSTDOC")
+            || k == "RUSTUP_TOOLCHAIN"
+            || k == "RUSTFLAGS";
+        if inherited {
+            c.env_remove(&k);
+        }
+    }
+    c
+}
+
 /// A built-in scenario by its path under `sim-host/scenarios`.
 pub fn scenario(rel: &str) -> Scenario {
     let path = repo_root().join("sim-host/scenarios").join(rel);

@@ -2,8 +2,7 @@
 //! build it with a recorded trace compiled in, run it, decode its defmt log
 //! with `defmt-print`, and read back its commands and step counts.
 
-use crate::avr::clean_cargo;
-use crate::{repo_root, Trace};
+use crate::{clean_cargo, repo_root, Trace};
 use planner_core::{Angle, Command, Output, Status};
 use std::io::Write;
 use std::path::PathBuf;

@@ -89,19 +89,15 @@ fn main() -> ! {
         }
     };
     let _ = uwriteln!(out, "READY");
-    let mut line: heapless::Vec<u8, 32> = heapless::Vec::new();
+    let mut lines = protocol::LineReader::new();
     loop {
-        let b = serial::read_blocking();
-        if b != b'\n' {
-            let _ = line.push(b);
+        let Some(req) = lines.feed(serial::read_blocking()) else {
             continue;
-        }
-        let Some(Request::Replay(x, y)) = protocol::parse(&line) else {
-            line.clear();
+        };
+        let Some(Request::Replay(x, y)) = req else {
             let _ = uwriteln!(out, "ERR");
             continue;
         };
-        line.clear();
         let _ = uwriteln!(out, "OK");
         let mut planner = FloatPlanner::<f32, AvrLibc>::new((x as f32, y as f32), false);
         replay::serve(|pose, raw| {
