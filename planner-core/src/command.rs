@@ -106,14 +106,14 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
     let standoff = (cfg.sensor_offset_mm + cfg.standoff_mm) as i32;
     let (c, s) = (relative.cos(), relative.sin());
     let mut free = (reach - rs).max(0);
-    for (&r, &(ci, si)) in readings.iter().zip(cfg.sensor_dirs.iter()) {
+    for (&r, dir) in readings.iter().zip(cfg.sensor_dirs.iter()) {
         let (e, obstacle) = match r {
             Reading::Range(mm) => (cfg.sensor_offset_mm as i32 + mm as i32, true),
             Reading::Clear => (reach, false),
             Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm as i32, true),
         };
         // The beam end in the robot frame, then in the frame of `relative`.
-        let (x, y) = (mul_q14(e, ci), mul_q14(e, si));
+        let (x, y) = dir.scaled(e);
         let along = mul_q14(x, c) + mul_q14(y, s);
         let lateral = mul_q14(y, c) - mul_q14(x, s);
         if lateral.abs() < rs {

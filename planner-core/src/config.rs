@@ -2,7 +2,7 @@
 //! documented default, validated when built so that a bad configuration is an
 //! error value, never a panic.
 
-use crate::fixed::{Angle, FORCE_ONE, TRIG_ONE};
+use crate::fixed::{Angle, Dir, FORCE_ONE};
 use crate::sensors::{AdcProfile, Calibration, CalibrationError, SENSOR_COUNT};
 
 /// Why a configuration was refused.
@@ -42,7 +42,7 @@ pub struct Config {
     pub(crate) sensor_range_mm: u16,
     pub(crate) sensor_angles: [Angle; SENSOR_COUNT],
     /// Q14 (cos, sin) of each sensor angle, precomputed.
-    pub(crate) sensor_dirs: [(i32, i32); SENSOR_COUNT],
+    pub(crate) sensor_dirs: [Dir; SENSOR_COUNT],
     pub(crate) xi_att: i32,
     pub(crate) xi_mp: i32,
     pub(crate) xi_sen: i32,
@@ -269,8 +269,7 @@ impl ConfigBuilder {
         let c = Calibration::gp2y0a21(self.adc).map_err(|e| ConfigError::Calibration(0, e))?;
         let calibration = [c.clone(), c.clone(), c.clone(), c.clone(), c];
         let angles = a.map(Angle::from_deg);
-        let sensor_dirs = angles.map(|t| (t.cos(), t.sin()));
-        debug_assert!(sensor_dirs.iter().all(|d| d.0.abs() <= TRIG_ONE));
+        let sensor_dirs = angles.map(Dir::of);
         Ok(Config {
             robot_radius_mm: self.robot_radius_mm,
             sensor_offset_mm: offset,

@@ -19,6 +19,16 @@
 //! attraction: enough to destroy the minimum, not so much that the rover
 //! flees. The pit fills and the rover spills out of it.
 //!
+//! A drop within [`VIRTUAL_MERGE_MM`] of a virtual obstacle already held
+//! adds to that one's weight instead of taking a slot: a rover stuck turning
+//! in place drops one every few cycles on the same spot, and an obstacle of
+//! weight `w` repels exactly as `w` obstacles there would, for the cost of one.
+//!
+//! Reach: an obstacle is skipped where its push has fallen below
+//! [`VIRTUAL_MIN_PUSH`] (1/32 of a force unit, 1/64 of the attraction, under
+//! a degree of heading); the distance where that happens is kept with it, so
+//! the test is two compares instead of a square root and two divisions.
+//!
 //! Bounded memory: at most [`VIRTUAL_CAPACITY`] virtual obstacles,
 //! [`CRUMB_CAPACITY`] breadcrumbs and [`WINDOW_CAPACITY`] recent positions;
 //! when full, the oldest is dropped (the newest describe the pit the rover
@@ -30,11 +40,18 @@
 //! progress and the goal is reported unreachable (a walled-in goal never
 //! lets the best distance improve).
 
-use crate::fixed::{inverse_square_force, within, Angle, Force, Point, FORCE_ONE};
+use crate::fixed::{
+    hypot, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
+    MAX_SCALED,
+};
 use heapless::Deque;
 
 /// Most virtual obstacles kept.
 pub const VIRTUAL_CAPACITY: usize = 24;
+/// A drop nearer than this (mm) to a held virtual obstacle strengthens it.
+pub const VIRTUAL_MERGE_MM: u16 = 16;
+/// A virtual obstacle whose push is below this (Q10) is skipped.
+pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
 /// Most breadcrumbs kept.
 pub const CRUMB_CAPACITY: usize = 16;
 /// Longest stuck-detection window, cycles.
@@ -110,6 +127,34 @@ pub enum Verdict {
     GiveUp,
 }
 
+/// A virtual obstacle: its centre and how many drops it stands for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct VirtualObstacle {
+    /// Centre, world mm.
+    pub centre: Point,
+    /// Drops merged into it (1 ..= 255); it repels `weight` times as hard.
+    pub weight: u8,
+    /// Beyond this distance on either axis its push is below
+    /// [`VIRTUAL_MIN_PUSH`], mm.
+    pub reach_mm: u16,
+}
+
+impl VirtualObstacle {
+    /// A virtual obstacle of `weight` drops at `centre`.
+    pub fn new(cfg: &EscapeConfig, centre: Point, weight: u8) -> Self {
+        // weight·K_v / d² < min ⇔ d² > weight·K_v·(10⁶ mm² / min), with K_v
+        // and min both Q10; saturating (a reach of ~65 m) if that overflows.
+        const MM2_PER_MIN: u32 = 1_000_000 / VIRTUAL_MIN_PUSH as u32;
+        let k = (weight as u32).saturating_mul(cfg.k_v.max(0) as u32);
+        VirtualObstacle {
+            centre,
+            weight,
+            reach_mm: isqrt(k.saturating_mul(MM2_PER_MIN)).saturating_add(1),
+        }
+    }
+}
+
 /// Progress monitor and virtual obstacles.
 #[derive(Clone, Debug)]
 pub struct Escape {
@@ -119,7 +164,7 @@ pub struct Escape {
     dropped: u16,
     recent: Deque<Point, WINDOW_CAPACITY>,
     crumbs: Deque<Point, CRUMB_CAPACITY>,
-    obstacles: Deque<Point, VIRTUAL_CAPACITY>,
+    obstacles: Deque<VirtualObstacle, VIRTUAL_CAPACITY>,
 }
 
 impl Default for Escape {
@@ -197,36 +242,75 @@ impl Escape {
         if looped {
             self.crumbs.clear();
         }
-        self.drops_since_best = self.drops_since_best.saturating_add(1);
-        if self.obstacles.is_full() {
-            self.obstacles.pop_front();
-        }
-        let _ = self.obstacles.push_back(robot);
-        self.dropped = self.dropped.saturating_add(1);
+        self.drop(cfg, robot);
         Verdict::Dropped
     }
 
+    /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
+    pub fn drop(&mut self, cfg: &EscapeConfig, robot: Point) {
+        if !cfg.enabled {
+            return;
+        }
+        self.drops_since_best = self.drops_since_best.saturating_add(1);
+        let held = self
+            .obstacles
+            .iter_mut()
+            .find(|v| within(v.centre, robot, VIRTUAL_MERGE_MM));
+        if let Some(v) = held {
+            *v = VirtualObstacle::new(cfg, v.centre, v.weight.saturating_add(1));
+        } else {
+            if self.obstacles.is_full() {
+                self.obstacles.pop_front();
+            }
+            let _ = self
+                .obstacles
+                .push_back(VirtualObstacle::new(cfg, robot, 1));
+        }
+        self.dropped = self.dropped.saturating_add(1);
+    }
+
     /// The summed repulsion of the virtual obstacles on the rover at
-    /// `robot`, whose goal bearing is `bearing`: `K_v / max(d, V_r)²` each.
+    /// `robot`, whose goal bearing is `bearing`: `K_v / max(d, V_r)²` each,
+    /// along the unit vector `(dx, dy) / r` from the obstacle's centre (`r`
+    /// its true distance), computed as components: no angle, so no `atan2`
+    /// and no sine per obstacle.
     pub fn force(&self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
         let mut f = Force::ZERO;
-        for v in self.obstacles.iter() {
-            let (dx, dy) = v.to(robot);
-            let d = robot.distance_mm(*v).max(cfg.radius_mm);
+        let (older, newer) = self.obstacles.as_slices();
+        for v in older.iter().chain(newer) {
+            let (dx, dy) = v.centre.to(robot);
+            let reach = v.reach_mm as u32;
+            if dx.unsigned_abs() >= reach || dy.unsigned_abs() >= reach {
+                continue;
+            }
+            let r = hypot(dx, dy);
+            let d = r.max(cfg.radius_mm);
             // (1/d²)·K_v in Q10 without 64-bit maths: ≤ 7,750 · 16,384 fits in i32.
-            let mag = ((inverse_square_force(d) >> 4) * cfg.k_v) >> (crate::fixed::FORCE_SHIFT - 4);
-            let dir = if dx == 0 && dy == 0 {
-                bearing.add(Angle::HALF)
-            } else {
-                Angle::atan2(dy, dx)
+            let mag =
+                (((inverse_square_force(d) >> 4) * cfg.k_v) >> (FORCE_SHIFT - 4)).min(MAX_SCALED);
+            let r = r as i32;
+            let one = match ((mag << 12) + r / 2).checked_div(r) {
+                // mag/r in Q12, rounded (mag < 2^17), then times |dx|, |dy|
+                // ≤ r: the products stay below mag · 2^12 + r < 2^30.
+                Some(per_mm) => Force {
+                    x: (dx * per_mm + (1 << 11)) >> 12,
+                    y: (dy * per_mm + (1 << 11)) >> 12,
+                },
+                // Standing on the centre: straight away from the goal.
+                _ => Force::along(bearing.add(Angle::HALF), mag),
             };
-            f = f.plus(Force::along(dir, mag));
+            // |one| ≤ 2^17 and weight ≤ 255: the products fit in i32.
+            let w = v.weight as i32;
+            f = f.plus(Force {
+                x: one.x * w,
+                y: one.y * w,
+            });
         }
         f
     }
 
-    /// Virtual obstacle centres, oldest first.
-    pub fn obstacles(&self) -> impl Iterator<Item = &Point> {
+    /// Virtual obstacles, oldest first.
+    pub fn obstacles(&self) -> impl Iterator<Item = &VirtualObstacle> {
         self.obstacles.iter()
     }
 
@@ -270,7 +354,7 @@ mod tests {
         // Cycle 3: 100 mm net over the window < 150 mm → stuck.
         assert_eq!(e.observe(&cfg, Point::new(100, 0), 1_950), Verdict::Dropped);
         // The obstacle sits where the rover stands.
-        assert_eq!(*e.obstacles().next().unwrap(), Point::new(100, 0));
+        assert_eq!(e.obstacles().next().unwrap().centre, Point::new(100, 0));
         assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Continue);
         assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Continue);
         assert_eq!(e.observe(&cfg, p, 2_000), Verdict::Dropped);
@@ -337,7 +421,9 @@ mod tests {
             ..EscapeConfig::default()
         };
         let mut e = Escape::new();
-        e.obstacles.push_back(Point::new(0, 0)).unwrap();
+        e.obstacles
+            .push_back(VirtualObstacle::new(&cfg, Point::new(0, 0), 1))
+            .unwrap();
         // K_v = 1, rover 500 mm to the right: 1/0.5² = 4 units along +x.
         assert_eq!(
             e.force(&cfg, Point::new(500, 0), Angle::ZERO),
@@ -346,6 +432,33 @@ mod tests {
         // Inside the radius the distance counts as V_r = 150 mm: 44.4 units.
         let f = e.force(&cfg, Point::new(0, 100), Angle::ZERO);
         assert_eq!((f.x, f.y / 1024), (0, 44));
+        // Weight 3 repels three times as hard.
+        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 3);
+        assert_eq!(
+            e.force(&cfg, Point::new(500, 0), Angle::ZERO),
+            Force { x: 3 * 4_096, y: 0 }
+        );
+        // Weight 1 reaches to where 1/d² = 1/32: √32 m = 5.657 m; just
+        // inside it pushes with 1/32 unit, at it not at all.
+        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
+        assert_eq!(e.obstacles().next().unwrap().reach_mm, 5_657);
+        let f = e.force(&cfg, Point::new(5_656, 0), Angle::ZERO);
+        assert_eq!(
+            f,
+            Force {
+                x: VIRTUAL_MIN_PUSH,
+                y: 0
+            }
+        );
+        assert_eq!(
+            e.force(&cfg, Point::new(0, -5_657), Angle::ZERO),
+            Force::ZERO
+        );
+        assert_eq!(
+            e.force(&cfg, Point::new(5_657, 1), Angle::ZERO),
+            Force::ZERO
+        );
+        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
         // Exactly on it: away from the goal.
         let f = e.force(&cfg, Point::new(0, 0), Angle::ZERO);
         assert!(f.x < -44 * 1024 && f.y == 0, "{f:?}");
@@ -357,6 +470,29 @@ mod tests {
     }
 
     #[test]
+    fn drops_on_the_same_spot_merge() {
+        let cfg = EscapeConfig {
+            window_steps: 2,
+            give_up_drops: 1_000,
+            ..EscapeConfig::default()
+        };
+        let mut e = Escape::new();
+        // A rover turning in place, its odometry wandering by a few mm.
+        for i in 0..20 {
+            e.observe(&cfg, Point::new(1_000 + i % 3, 500 - i % 5), 1_000);
+        }
+        assert_eq!(e.len(), 1);
+        let v = e.obstacles().next().unwrap();
+        assert_eq!(v.weight as u16, e.dropped());
+        assert!(within(v.centre, Point::new(1_000, 500), 6));
+        assert!(e.dropped() >= 9);
+        // 19 mm away is a new one.
+        e.observe(&cfg, Point::new(1_020, 500), 1_000);
+        e.observe(&cfg, Point::new(1_020, 500), 1_000);
+        assert_eq!(e.len(), 2);
+    }
+
+    #[test]
     fn capacity_evicts_the_oldest() {
         let cfg = EscapeConfig {
             window_steps: 2,
@@ -365,7 +501,7 @@ mod tests {
         };
         let mut e = Escape::new();
         for i in 0..(2 * (VIRTUAL_CAPACITY as i16 + 5)) {
-            e.observe(&cfg, Point::new(i, 0), 1_000);
+            e.observe(&cfg, Point::new(20 * i, 0), 1_000);
         }
         assert!(e.dropped() as usize > VIRTUAL_CAPACITY);
         assert_eq!(e.len(), VIRTUAL_CAPACITY);

@@ -116,11 +116,7 @@ impl Angle {
     /// `(cos, sin)` scaled so the vector has length `magnitude` (any scale;
     /// clamped to ±131,071 so the Q14 products fit in 32 bits).
     pub fn scaled(self, magnitude: i32) -> (i32, i32) {
-        let magnitude = magnitude.clamp(-MAX_SCALED, MAX_SCALED);
-        (
-            mul_q14(self.cos(), magnitude),
-            mul_q14(self.sin(), magnitude),
-        )
+        Dir::of(self).scaled(magnitude)
     }
 
     /// `atan2(y, x)` as an angle; `atan2(0, 0)` is 0.
@@ -166,6 +162,57 @@ impl Angle {
     }
 }
 
+/// A direction as a Q14 unit vector `(cos, sin)`.
+///
+/// Turning a direction by another is four 16 × 16-bit multiplies, cheaper
+/// than a sine and a cosine: the planner takes the heading's sine and
+/// cosine once per cycle and turns the sensors' fixed directions by it.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Dir {
+    /// Cosine, Q14.
+    pub c: i32,
+    /// Sine, Q14.
+    pub s: i32,
+}
+
+impl Dir {
+    /// The direction of an angle.
+    pub fn of(a: Angle) -> Dir {
+        Dir {
+            c: a.cos(),
+            s: a.sin(),
+        }
+    }
+
+    /// This direction turned by `by` (the angle sum, as a complex product).
+    pub fn rotated(self, by: Dir) -> Dir {
+        Dir {
+            c: mul_q14(self.c, by.c) - mul_q14(self.s, by.s),
+            s: mul_q14(self.s, by.c) + mul_q14(self.c, by.s),
+        }
+    }
+
+    /// `(x, y)` of a vector of length `magnitude` along this direction
+    /// (clamped to ±[`MAX_SCALED`] so the Q14 products fit in 32 bits).
+    pub fn scaled(self, magnitude: i32) -> (i32, i32) {
+        let magnitude = magnitude.clamp(-MAX_SCALED, MAX_SCALED);
+        (mul_q14(self.c, magnitude), mul_q14(self.s, magnitude))
+    }
+}
+
+impl core::ops::Neg for Dir {
+    type Output = Dir;
+
+    /// The opposite direction.
+    fn neg(self) -> Dir {
+        Dir {
+            c: -self.c,
+            s: -self.s,
+        }
+    }
+}
+
 /// Largest magnitude [`Angle::scaled`] accepts (`2^17 − 1`).
 pub const MAX_SCALED: i32 = (1 << 17) - 1;
 
@@ -197,9 +244,10 @@ pub fn within(a: Point, b: Point, r_mm: u16) -> bool {
     if dx.abs() >= r || dy.abs() >= r {
         return false;
     }
-    // |dx|, |dy| < r ≤ 65,535: squares as u32 (16 × 16 bits).
+    // |dx|, |dy| < r ≤ 65,535: squares as u32 (16 × 16 bits); their sum
+    // saturates, and a saturated sum exceeds any r².
     let (ux, uy) = (dx.unsigned_abs(), dy.unsigned_abs());
-    ux * ux + uy * uy < (r as u32) * (r as u32)
+    (ux * ux).saturating_add(uy * uy) < (r as u32) * (r as u32)
 }
 
 /// A point of the world in millimetres (world frame, x right, y up).
@@ -292,15 +340,19 @@ fn isqrt_bitwise(v: u32) -> u16 {
     root as u16
 }
 
-/// `floor(√v)` by Newton's iteration from a power of two above `√v`, from
-/// where it decreases monotonically to the floor.
+/// `floor(√v)` by Newton's iteration from above `√v`, from where it
+/// decreases monotonically to the floor.
 #[cfg_attr(target_arch = "avr", allow(dead_code))]
 fn isqrt_newton(v: u32) -> u16 {
     if v == 0 {
         return 0;
     }
-    let bits = 32 - v.leading_zeros();
-    let mut x: u32 = 1 << bits.div_ceil(2);
+    // Start one Newton step from 2^h, h = ⌊bits/2⌋: `(2^h + v/2^h) / 2`
+    // by shifts. It is at least ⌊√v⌋ (so the iteration decreases
+    // monotonically to the floor) and at most 1.5·√v, which saves one or
+    // two divisions over starting at a power of two.
+    let h = (32 - v.leading_zeros()) / 2;
+    let mut x: u32 = ((1 << h) + (v >> h)) / 2;
     loop {
         let y = (x + v / x) / 2;
         if y >= x {
@@ -356,6 +408,12 @@ impl Force {
             x: self.x.saturating_add(other.x),
             y: self.y.saturating_add(other.y),
         }
+    }
+
+    /// A force of `magnitude` (Q10) pointing along the unit vector `dir`.
+    pub fn along_dir(dir: Dir, magnitude: i32) -> Force {
+        let (x, y) = dir.scaled(magnitude);
+        Force { x, y }
     }
 
     /// The direction of the force (`atan2`, eq. 17); `None` for a zero force.
@@ -463,6 +521,36 @@ mod tests {
         assert_eq!(hypot(-32_768, 0), 32_768);
         assert_eq!(hypot(i32::MAX, i32::MAX), u16::MAX);
         assert_eq!(Point::new(0, 0).distance_mm(Point::new(300, 400)), 500);
+    }
+
+    #[test]
+    fn within_is_the_exact_distance_test() {
+        let vals = [
+            i16::MIN,
+            -20_000,
+            -151,
+            -150,
+            -149,
+            -1,
+            0,
+            1,
+            99,
+            149,
+            150,
+            151,
+            i16::MAX,
+        ];
+        for &x in &vals {
+            for &y in &vals {
+                for r in [0u16, 1, 2, 100, 150, 151, 400, 40_000, u16::MAX] {
+                    let (a, b) = (Point::new(x / -2, 7), Point::new(x, y));
+                    let (dx, dy) = (x as i64 - (x / -2) as i64, y as i64 - 7);
+                    let want = dx * dx + dy * dy < r as i64 * r as i64;
+                    assert_eq!(within(a, b, r), want, "{x} {y} {r}");
+                    assert_eq!(within(b, a, r), want, "{x} {y} {r}");
+                }
+            }
+        }
     }
 
     #[test]

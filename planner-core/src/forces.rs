@@ -3,7 +3,7 @@
 //! inconsistent; the directions are the design).
 
 use crate::config::Config;
-use crate::fixed::{inverse_square_force, mul_q14, Angle, Force, Point};
+use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force, Point};
 use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// A collision point: a reading inside the swept corridor of the next step.
@@ -37,10 +37,10 @@ pub fn collision_points(
 ) -> heapless::Vec<CollisionPoint, SENSOR_COUNT> {
     let mut out = heapless::Vec::new();
     let half_width = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
-    for (i, (&r, &(c, s))) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
+    for (i, (&r, dir)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
         if let Some(d) = obstacle_distance_mm(cfg, r) {
-            let lateral = mul_q14(d as i32, s.abs());
-            let forward = mul_q14(d as i32, c);
+            let lateral = mul_q14(d as i32, dir.s.abs());
+            let forward = mul_q14(d as i32, dir.c);
             if lateral <= half_width && forward <= step_mm as i32 {
                 let _ = out.push(CollisionPoint {
                     sensor: i as u8,
@@ -58,17 +58,26 @@ pub fn attractive(cfg: &Config, bearing: Angle) -> Force {
 }
 
 /// Repulsive force (eqs. 9, 10): `Σ (P_R − P_Ci) / d³`, i.e. a unit vector
-/// away from each collision point scaled by `1/d²`.
-pub fn repulsive(cfg: &Config, heading: Angle, points: &[CollisionPoint]) -> Force {
+/// away from each collision point scaled by `1/d²`. `heading` is the
+/// robot's heading as a unit vector.
+pub fn repulsive(cfg: &Config, heading: Dir, points: &[CollisionPoint]) -> Force {
     let mut f = Force::ZERO;
     for p in points {
-        let toward = heading.add(cfg.sensor_angles[p.sensor as usize % SENSOR_COUNT]);
-        f = f.plus(Force::along(
-            toward.add(Angle::HALF),
-            inverse_square_force(p.distance_mm),
-        ));
+        let toward = sensor_direction(cfg, heading, p.sensor as usize);
+        f = f.plus(repulsion(toward, p.distance_mm));
     }
     f
+}
+
+/// Eq. 10 for one collision point `distance_mm` away along the world
+/// direction `toward`: `1/d²` pointing back from it.
+pub fn repulsion(toward: Dir, distance_mm: u16) -> Force {
+    Force::along_dir(-toward, inverse_square_force(distance_mm))
+}
+
+/// World direction of sensor `i`'s beam for a robot heading `heading`.
+pub fn sensor_direction(cfg: &Config, heading: Dir, i: usize) -> Dir {
+    cfg.sensor_dirs[i % SENSOR_COUNT].rotated(heading)
 }
 
 /// Midpoint repulsive force (eqs. 12, 13): constant magnitude ξ_MP away from
@@ -119,28 +128,24 @@ pub fn sensor_group(m: Motion) -> &'static [usize] {
 /// Off-sensor attractive force (eqs. 14, 15): `ξ Σ SC_i · unit(P_Sen_i − P_R)`
 /// over the chosen group, `SC_i = 1` when sensor i sees nothing. The end of
 /// a sensor's range lies along its axis, so the unit vector is exact.
-pub fn off_sensor(cfg: &Config, heading: Angle, group: Motion, readings: &Readings) -> Force {
+pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings) -> Force {
     let mut f = Force::ZERO;
     for &i in sensor_group(group) {
-        if let (Some(Reading::Clear), Some(&angle)) = (readings.get(i), cfg.sensor_angles.get(i)) {
-            f = f.plus(Force::along(heading.add(angle), cfg.xi_sen));
+        if let Some(Reading::Clear) = readings.get(i) {
+            f = f.plus(Force::along_dir(
+                sensor_direction(cfg, heading, i),
+                cfg.xi_sen,
+            ));
         }
     }
     f
 }
 
-/// World position of an obstacle `distance_mm` from the centre along sensor `i`.
-pub fn world_point(
-    cfg: &Config,
-    robot: Point,
-    heading: Angle,
-    sensor: usize,
-    distance_mm: u16,
-) -> Point {
-    robot.offset(
-        heading.add(cfg.sensor_angles[sensor % SENSOR_COUNT]),
-        distance_mm,
-    )
+/// World position of an obstacle `distance_mm` from `robot` along the world
+/// direction `toward`.
+pub fn world_point(robot: Point, toward: Dir, distance_mm: u16) -> Point {
+    let (dx, dy) = toward.scaled(distance_mm as i32);
+    Point::saturating(robot.x as i32 + dx, robot.y as i32 + dy)
 }
 
 #[cfg(test)]
@@ -194,7 +199,7 @@ mod tests {
             distance_mm: 500,
         }];
         assert_eq!(
-            repulsive(&cfg(), Angle::ZERO, &p),
+            repulsive(&cfg(), Dir::of(Angle::ZERO), &p),
             Force { x: -4_096, y: 0 }
         );
         // Two symmetric points at ±20°, 1 m: each 1 unit; y cancels, x = −2·cos20° = −1.879.
@@ -208,7 +213,7 @@ mod tests {
                 distance_mm: 1_000,
             },
         ];
-        let f = repulsive(&cfg(), Angle::ZERO, &p);
+        let f = repulsive(&cfg(), Dir::of(Angle::ZERO), &p);
         assert_eq!(f.y, 0);
         assert!((f.x + 1_924).abs() <= 2, "{f:?}");
     }
@@ -245,10 +250,13 @@ mod tests {
         // CCWM, +20° off, +40° on: one unit along heading + 20°.
         let mut r = [Reading::Clear; SENSOR_COUNT];
         r[4] = Reading::Range(300);
-        let f = off_sensor(&c, Angle::ZERO, Motion::CounterClockwise, &r);
+        let f = off_sensor(&c, Dir::of(Angle::ZERO), Motion::CounterClockwise, &r);
         let want = Force::along(Angle::from_deg(20), 1_024);
         assert_eq!(f, want);
         assert!((f.x - 962).abs() <= 1 && (f.y - 350).abs() <= 1, "{f:?}");
-        assert_eq!(off_sensor(&c, Angle::ZERO, Motion::Direct, &r), Force::ZERO);
+        assert_eq!(
+            off_sensor(&c, Dir::of(Angle::ZERO), Motion::Direct, &r),
+            Force::ZERO
+        );
     }
 }

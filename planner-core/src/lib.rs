@@ -53,12 +53,16 @@ pub mod sensors;
 pub use command::{Command, Guard, Output, Status};
 pub use config::{Config, ConfigBuilder, ConfigError};
 pub use escape::{EscapeConfig, Verdict};
-pub use fixed::{Angle, Force, Point};
+pub use fixed::{Angle, Dir, Force, Point};
 pub use sensors::{
     AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
 };
 
 use forces::Motion;
+
+/// Beyond this angle from the rover's heading a force counts as "behind"
+/// (see the sector rule in [`Planner::step_raw`]).
+const BEHIND: Angle = Angle::from_deg(120);
 
 /// The rover's pose from odometry.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -80,6 +84,8 @@ pub struct Planner {
     escape: escape::Escape,
     fold_back: sensors::FoldBackFilter,
     following: bool,
+    turn_side: i8,
+    spun: bool,
     paper_step_mm: u16,
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
@@ -97,6 +103,8 @@ impl Planner {
             escape: escape::Escape::new(),
             fold_back: sensors::FoldBackFilter::default(),
             following: false,
+            turn_side: 0,
+            spun: false,
             paper_step_mm: range,
             unreachable: false,
             last_points: heapless::Vec::new(),
@@ -113,6 +121,8 @@ impl Planner {
         self.escape = escape::Escape::new();
         self.fold_back = sensors::FoldBackFilter::default();
         self.following = false;
+        self.turn_side = 0;
+        self.spun = false;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
         self.last_points.clear();
@@ -183,12 +193,25 @@ impl Planner {
 
         // Collision points (eqs. 7, 8) and the memory of them (eqs. 11-13).
         let points = forces::collision_points(cfg, &readings, self.paper_step_mm);
+        // The heading's sine and cosine once; each sensor's world direction
+        // is its fixed direction turned by them, and serves both the point's
+        // position and its repulsion (eqs. 9, 10).
+        let heading_dir = Dir::of(pose.heading);
+        let mut repulsive = Force::ZERO;
         for p in points.iter() {
-            let w = forces::world_point(cfg, robot, pose.heading, p.sensor as usize, p.distance_mm);
-            let _ = self.last_points.push(w);
-            self.memory
-                .remember(w, robot, pose.heading, self.goal, cfg.diagonal_tolerance);
+            let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
+            let _ = self
+                .last_points
+                .push(forces::world_point(robot, toward, p.distance_mm));
+            repulsive = repulsive.plus(forces::repulsion(toward, p.distance_mm));
         }
+        self.memory.remember_all(
+            &self.last_points,
+            robot,
+            pose.heading,
+            self.goal,
+            cfg.diagonal_tolerance,
+        );
 
         // Off-sensor following state (§5.5): from the first collision until DM.
         let motion = forces::motion(cfg, pose.heading, bearing);
@@ -201,13 +224,13 @@ impl Planner {
         // Eq. 16: the sum of the forces; the near-target rule drops the
         // midpoint and off-sensor forces.
         let mut f = forces::attractive(cfg, bearing)
-            .plus(forces::repulsive(cfg, pose.heading, &points))
+            .plus(repulsive)
             .plus(self.escape.force(&cfg.escape, robot, bearing));
         if !near {
             let (_, ax, ay) = self.memory.away_from_midpoint(robot, self.goal);
             f = f.plus(forces::midpoint(cfg, ax, ay));
             if self.following {
-                f = f.plus(forces::off_sensor(cfg, pose.heading, motion, &readings));
+                f = f.plus(forces::off_sensor(cfg, heading_dir, motion, &readings));
             }
         }
         // Eq. 17.
@@ -233,21 +256,29 @@ impl Planner {
         // cycle still sees the obstacle; a full turn away would lose sight of
         // it and the attraction would turn the rover straight back (a
         // livelock of turns). Bounded turns make it slide along the obstacle.
+        //
+        // A force pointing nearly backwards (beyond ±120°) gives no reliable
+        // side: the side flips from cycle to cycle with the noise and the
+        // rover see-saws between two headings, stuck. There it keeps
+        // turning the way it turned last, and so turns round.
         let half = cfg.sector_half_width();
         let mut relative = heading.sub(pose.heading);
         if !points.is_empty() && relative.abs_signed() > half.0 {
-            relative = if relative.signed() > 0 {
-                half
-            } else {
-                half.neg()
-            };
+            let mut left = relative.signed() > 0;
+            if relative.abs_signed() > BEHIND.0 && self.turn_side != 0 {
+                left = self.turn_side > 0;
+            }
+            self.turn_side = if left { 1 } else { -1 };
+            relative = if left { half } else { half.neg() };
             heading = pose.heading.add(relative);
+        } else {
+            self.turn_side = 0;
         }
+        let free = |relative: Angle| command::free_distance_mm(cfg, &readings, relative);
         let mut step = if relative.abs_signed() > half.0 {
             0
         } else {
-            self.paper_step_mm
-                .min(command::free_distance_mm(cfg, &readings, relative))
+            self.paper_step_mm.min(free(relative))
         };
         if near {
             step = step.min(goal_mm);
@@ -255,6 +286,19 @@ impl Planner {
         if step < cfg.min_step_mm {
             step = 0;
         }
+        // Ours: two turns on the spot in a row with nothing in sight is the
+        // start of a livelock (turn to the force, see the obstacle, turn
+        // away, lose sight of it, turn back). Break it by advancing along
+        // the free heading the rover already faces.
+        let spin = step == 0 && points.is_empty() && relative.abs_signed() > half.0;
+        if spin && self.spun {
+            heading = pose.heading;
+            step = self.paper_step_mm.min(free(Angle::ZERO)) / 2;
+            if step < cfg.min_step_mm {
+                step = 0;
+            }
+        }
+        self.spun = spin && step == 0;
         Output {
             command: Command {
                 heading,
@@ -363,6 +407,48 @@ mod tests {
         assert_eq!(out.command.step_mm, seen_mm + 200);
         assert_eq!(p.last_collision_points().len(), 1);
         assert_eq!(p.memory().len(), 1);
+    }
+
+    #[test]
+    fn a_force_from_behind_turns_the_rover_round_one_way() {
+        let mut p = planner(Point::new(3_000, 0));
+        let cal = p.config().calibration(2).unwrap().clone();
+        // A wall 150 mm ahead of the front sensor: its repulsion (≈ 16
+        // units) dwarfs the attraction (2) and points straight back.
+        let near = (86..=532)
+            .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= 150)
+            .unwrap();
+        let counts = [0, 0, near, 0, 0];
+        let first = p.step_raw(at(0, 0, 0), &counts).command.heading;
+        assert_eq!(first.abs_signed(), Angle::from_deg(40).0);
+        // From there the wall is still dead ahead, but the attraction now
+        // pulls to the other side: without the rule the rover would turn
+        // back to 0° and see-saw. It goes on turning the same way.
+        let deg = first.signed() / 182;
+        let second = p.step_raw(at(0, 0, deg), &counts).command.heading;
+        assert_eq!(second, first.add(first));
+        let third = p.step_raw(at(0, 0, 2 * deg), &counts).command.heading;
+        assert_eq!(third, first.add(first).add(first));
+    }
+
+    #[test]
+    fn a_second_turn_on_the_spot_in_a_row_becomes_an_advance() {
+        // The goal behind the rover and nothing in sight: turn on the spot.
+        let mut p = planner(Point::new(-3_000, 0));
+        let out = p.step_raw(at(0, 0, 0), &[0; 5]).command;
+        assert_eq!((out.heading, out.step_mm), (Angle::HALF, 0));
+        // The rover faces 90° instead (as when the force swings between a
+        // seen and an unseen obstacle): a second pure turn would start the
+        // livelock, so it advances along 90°, half the free distance.
+        let out = p.step_raw(at(0, 0, 90), &[0; 5]).command;
+        assert_eq!(out.heading, Angle::from_deg(90));
+        let c = p.config();
+        let free =
+            c.sensor_offset_mm() + c.sensor_range_mm() - c.robot_radius_mm() - c.clearance_mm();
+        assert_eq!(out.step_mm, free / 2);
+        // After that advance, a pure turn is allowed again.
+        let out = p.step_raw(at(0, 390, 0), &[0; 5]).command;
+        assert_eq!(out.step_mm, 0);
     }
 
     #[test]

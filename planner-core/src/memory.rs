@@ -17,25 +17,35 @@
 //! the most recent obstacles are the ones the robot is dealing with.
 
 use crate::fixed::{Angle, Point};
-use heapless::Deque;
+use heapless::Vec;
 
 /// Most remembered collision points.
 pub const MEMORY_CAPACITY: usize = 16;
 
 /// Points closer than this (Chebyshev distance, mm) to a remembered point of
 /// the same class are merged into it.
-pub const MERGE_MM: i16 = 60;
+pub const MERGE_MM: u16 = 60;
+
+/// Whether two points are nearer than [`MERGE_MM`] on both axes: |d| <
+/// MERGE_MM as one unsigned compare of d + MERGE_MM − 1 (the merge scan runs
+/// over the whole memory every cycle).
+fn near(a: Point, b: Point) -> bool {
+    const M: i32 = MERGE_MM as i32 - 1;
+    let close = |a: i16, b: i16| (a as i32 - b as i32 + M) as u32 <= 2 * M as u32;
+    close(a.x, b.x) && close(a.y, b.y)
+}
 
 /// The class of a remembered point (eqs. 11–13).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+#[repr(u8)]
 pub enum PointClass {
     /// Detected while moving mainly along x; active while between robot and target in x.
-    X,
+    X = 0b01,
     /// Detected while moving mainly along y; active while between robot and target in y.
-    Y,
+    Y = 0b10,
     /// Detected while moving diagonally; active while between them in x and y.
-    XY,
+    XY = 0b11,
 }
 
 /// A remembered collision point.
@@ -48,22 +58,43 @@ pub struct Remembered {
     pub class: PointClass,
 }
 
-fn between(v: i16, a: i16, b: i16) -> bool {
-    let (lo, hi) = if a <= b { (a, b) } else { (b, a) };
-    lo <= v && v <= hi
+/// The box spanned by the robot and the target, for the activity test of
+/// every remembered point in one cycle (computed once, not per point).
+#[derive(Clone, Copy, Debug)]
+struct Span {
+    x_lo: i32,
+    x_len: u32,
+    y_lo: i32,
+    y_len: u32,
+}
+
+impl Span {
+    fn new(robot: Point, target: Point) -> Span {
+        Span {
+            x_lo: robot.x.min(target.x) as i32,
+            x_len: robot.x.abs_diff(target.x) as u32,
+            y_lo: robot.y.min(target.y) as i32,
+            y_len: robot.y.abs_diff(target.y) as u32,
+        }
+    }
+
+    /// Whether `p`'s class finds it between robot and target. One unsigned
+    /// compare per axis: below `lo`, the difference wraps above the span.
+    fn holds(&self, p: &Remembered) -> bool {
+        let in_x = (p.point.x as i32 - self.x_lo) as u32 <= self.x_len;
+        let in_y = (p.point.y as i32 - self.y_lo) as u32 <= self.y_len;
+        // The class's discriminant has one bit per axis it must lie
+        // between: it holds when no needed bit is missing.
+        let inside = in_x as u8 | (in_y as u8) << 1;
+        p.class as u8 & !inside == 0
+    }
 }
 
 impl Remembered {
     /// Whether the point counts for the midpoint force with the robot at
     /// `robot` and the target at `target`.
     pub fn is_active(&self, robot: Point, target: Point) -> bool {
-        let in_x = between(self.point.x, robot.x, target.x);
-        let in_y = between(self.point.y, robot.y, target.y);
-        match self.class {
-            PointClass::X => in_x,
-            PointClass::Y => in_y,
-            PointClass::XY => in_x && in_y,
-        }
+        Span::new(robot, target).holds(self)
     }
 }
 
@@ -85,16 +116,24 @@ pub fn direction_class(heading: Angle, diagonal_tolerance: Angle) -> PointClass 
 }
 
 /// The bounded memory of collision points.
+///
+/// A `heapless::Vec` used as a ring: while not full new points are pushed;
+/// once full, the point at `oldest` is overwritten and `oldest` moves on.
+/// The points stay one contiguous slice, so the scans that run every cycle
+/// (merging, the midpoint) are single tight loops (a wrapping deque makes
+/// each of them two).
 #[derive(Clone, Debug, Default)]
 pub struct Memory {
-    points: Deque<Remembered, MEMORY_CAPACITY>,
+    points: Vec<Remembered, MEMORY_CAPACITY>,
+    oldest: usize,
 }
 
 impl Memory {
     /// An empty memory.
     pub const fn new() -> Self {
         Memory {
-            points: Deque::new(),
+            points: Vec::new(),
+            oldest: 0,
         }
     }
 
@@ -109,23 +148,50 @@ impl Memory {
         target: Point,
         diagonal_tolerance: Angle,
     ) -> bool {
+        self.remember_all(&[point], robot, heading, target, diagonal_tolerance) == 1
+    }
+
+    /// [`Memory::remember`] for the collision points of one cycle, in
+    /// order (a point merges into one stored earlier in the same cycle),
+    /// classifying once. Returns how many were stored.
+    pub fn remember_all(
+        &mut self,
+        points: &[Point],
+        robot: Point,
+        heading: Angle,
+        target: Point,
+        diagonal_tolerance: Angle,
+    ) -> usize {
         let class = direction_class(heading, diagonal_tolerance);
-        let r = Remembered { point, class };
-        if !r.is_active(robot, target) {
-            return false;
+        let span = Span::new(robot, target);
+        let mut stored = 0;
+        for &point in points {
+            let r = Remembered { point, class };
+            if !span.holds(&r) {
+                continue;
+            }
+            if self
+                .points
+                .iter()
+                .any(|q| near(q.point, point) && q.class == class)
+            {
+                continue;
+            }
+            self.store(r);
+            stored += 1;
         }
-        let near = |q: &Remembered| {
-            q.class == class
-                && (q.point.x as i32 - point.x as i32).abs() < MERGE_MM as i32
-                && (q.point.y as i32 - point.y as i32).abs() < MERGE_MM as i32
-        };
-        if self.points.iter().any(near) {
-            return false;
+        stored
+    }
+
+    /// Keep `r`; when full, in place of the oldest point.
+    fn store(&mut self, r: Remembered) {
+        if self.points.push(r).is_ok() {
+            return;
         }
-        if self.points.is_full() {
-            self.points.pop_front();
+        if let Some(slot) = self.points.get_mut(self.oldest) {
+            *slot = r;
         }
-        self.points.push_back(r).is_ok()
+        self.oldest = (self.oldest + 1) % MEMORY_CAPACITY;
     }
 
     /// `(n, Σ(P_R − P_i))` over the active points: the direction of
@@ -133,13 +199,15 @@ impl Memory {
     pub fn away_from_midpoint(&self, robot: Point, target: Point) -> (u8, i32, i32) {
         let mut n = 0u8;
         let (mut sx, mut sy) = (0i32, 0i32);
-        for p in self.points.iter().filter(|p| p.is_active(robot, target)) {
-            let (dx, dy) = p.point.to(robot);
-            sx += dx;
-            sy += dy;
+        let span = Span::new(robot, target);
+        for p in self.points.iter().filter(|p| span.holds(p)) {
+            sx += p.point.x as i32;
+            sy += p.point.y as i32;
             n += 1;
         }
-        (n, sx, sy)
+        // Σ(P_R − P_i) = n·P_R − ΣP_i.
+        let k = n as i32;
+        (n, k * robot.x as i32 - sx, k * robot.y as i32 - sy)
     }
 
     /// The midpoint `P_M` of the active points (eq. 11), for reports.
@@ -157,7 +225,11 @@ impl Memory {
 
     /// All remembered points, oldest first.
     pub fn iter(&self) -> impl Iterator<Item = &Remembered> {
-        self.points.iter()
+        let (newer, older) = self
+            .points
+            .split_at_checked(self.oldest)
+            .unwrap_or_default();
+        older.iter().chain(newer)
     }
 
     /// Number of remembered points.
@@ -172,7 +244,7 @@ impl Memory {
 
     /// Forget everything (a new goal).
     pub fn clear(&mut self) {
-        self.points.clear();
+        *self = Memory::new();
     }
 }
 
@@ -242,7 +314,100 @@ mod tests {
             ));
         }
         assert_eq!(m.len(), MEMORY_CAPACITY);
-        // The first three (1000, 1100, 1200) were evicted.
-        assert_eq!(m.iter().next().unwrap().point, Point::new(1_300, 0));
+        // The first three (1000, 1100, 1200) were evicted; the rest come
+        // oldest first.
+        let xs: std::vec::Vec<i16> = m.iter().map(|r| r.point.x).collect();
+        let want: std::vec::Vec<i16> = (0..MEMORY_CAPACITY as i16)
+            .map(|i| 1_300 + 100 * i)
+            .collect();
+        assert_eq!(xs, want);
+        m.clear();
+        assert!(m.is_empty() && m.iter().next().is_none());
+    }
+
+    proptest::proptest! {
+        /// Until the memory is full, a cycle's points remembered together
+        /// are stored as remembering them one by one would.
+        #[test]
+        fn one_pass_equals_one_by_one(
+            held in proptest::collection::vec((0i16..600, -300i16..300), 0..8),
+            cycle in proptest::collection::vec((0i16..600, -300i16..300), 0..6),
+            deg in -180i16..180,
+        ) {
+            let (robot, target) = (Point::new(-10, -400), Point::new(700, 400));
+            let heading = Angle::from_deg(deg);
+            let mut a = Memory::new();
+            for &(x, y) in &held {
+                a.remember(Point::new(x, y), robot, heading, target, TOL);
+            }
+            let mut b = a.clone();
+            let pts: std::vec::Vec<Point> = cycle.iter().map(|&(x, y)| Point::new(x, y)).collect();
+            let n = a.remember_all(&pts, robot, heading, target, TOL);
+            let m = pts.iter().filter(|&&p| b.remember(p, robot, heading, target, TOL)).count();
+            proptest::prop_assert_eq!(n, m);
+            proptest::prop_assert!(a.iter().eq(b.iter()));
+        }
+    }
+
+    #[test]
+    fn merging_is_strictly_within_the_merge_distance() {
+        let mut m = Memory::new();
+        let (robot, target) = (Point::new(0, 0), Point::new(30_000, 0));
+        assert!(m.remember(Point::new(1_000, 0), robot, Angle::ZERO, target, TOL));
+        let d = MERGE_MM as i16;
+        for (x, y) in [(d - 1, 0), (1 - d, d - 1), (0, 1 - d)] {
+            assert!(!m.remember(Point::new(1_000 + x, y), robot, Angle::ZERO, target, TOL));
+        }
+        assert!(m.remember(Point::new(1_000 - d, 0), robot, Angle::ZERO, target, TOL));
+        assert!(m.remember(Point::new(1_000, d), robot, Angle::ZERO, target, TOL));
+        // Same place, other class: kept apart.
+        assert!(m.remember(
+            Point::new(1_000, 0),
+            robot,
+            Angle::from_deg(45),
+            Point::new(3_000, 3_000),
+            TOL
+        ));
+    }
+
+    #[test]
+    fn the_span_test_is_the_betweenness_of_eqs_11_to_13() {
+        fn between(v: i16, a: i16, b: i16) -> bool {
+            a.min(b) <= v && v <= a.max(b)
+        }
+        let vals = [
+            i16::MIN,
+            -30_000,
+            -501,
+            -500,
+            -1,
+            0,
+            1,
+            499,
+            500,
+            30_000,
+            i16::MAX,
+        ];
+        for &a in &vals {
+            for &b in &vals {
+                for &v in &vals {
+                    for class in [PointClass::X, PointClass::Y, PointClass::XY] {
+                        let w = v.wrapping_add(250);
+                        let p = Remembered {
+                            point: Point::new(v, w),
+                            class,
+                        };
+                        let (robot, target) = (Point::new(a, b), Point::new(b, a));
+                        let (in_x, in_y) = (between(v, a, b), between(w, b, a));
+                        let want = match class {
+                            PointClass::X => in_x,
+                            PointClass::Y => in_y,
+                            PointClass::XY => in_x && in_y,
+                        };
+                        assert_eq!(p.is_active(robot, target), want, "{a} {b} {v} {class:?}");
+                    }
+                }
+            }
+        }
     }
 }

@@ -109,6 +109,8 @@ pub struct FloatPlanner<F, M = Libm> {
     goal: (F, F),
     memory: heapless::Vec<((F, F), u8), 16>,
     following: bool,
+    turn_side: i8,
+    spun: bool,
     paper_step: F,
     last_mm: [F; SENSOR_COUNT],
     track: bool,
@@ -126,6 +128,8 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
             goal,
             memory: heapless::Vec::new(),
             following: false,
+            turn_side: 0,
+            spun: false,
             paper_step: c(RANGE),
             last_mm: [F::zero(); SENSOR_COUNT],
             track: tracking,
@@ -374,8 +378,17 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         if !pts.is_empty() && rel.abs() > half {
             // Which edge: a force straight behind is a decision boundary.
             self.near(rel.abs().to_degrees(), c(180.0));
-            rel = if rel < F::zero() { -half } else { half };
+            // Beyond ±120° the side turned last is kept (the rover turns round).
+            self.near(rel.abs().to_degrees(), c(120.0));
+            let mut left = rel >= F::zero();
+            if rel.abs() > c::<F>(120.0).to_radians() && self.turn_side != 0 {
+                left = self.turn_side > 0;
+            }
+            self.turn_side = if left { 1 } else { -1 };
+            rel = if left { half } else { -half };
             heading = h + rel;
+        } else {
+            self.turn_side = 0;
         }
         let mut step = if rel.abs() > half {
             F::zero()
@@ -389,6 +402,18 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         if step < c(MIN_STEP) {
             step = F::zero();
         }
+        // Two turns on the spot in a row with nothing in sight: advance
+        // along the heading faced instead.
+        let spin = step == F::zero() && pts.is_empty() && rel.abs() > half;
+        if spin && self.spun {
+            heading = h;
+            step = (self.paper_step.min(free::<F, M>(&rd, F::zero())) / c(2.0)).floor();
+            self.near(step, c(MIN_STEP));
+            if step < c(MIN_STEP) {
+                step = F::zero();
+            }
+        }
+        self.spun = spin && step == F::zero();
         (wrap(heading), step, Status::Moving)
     }
 }

@@ -183,7 +183,11 @@ impl SimPlanner {
             .midpoint(to_point(robot), core.goal())
             .map(to_v2);
         let vr = core.config().escape().radius_mm as f64 / 1000.0;
-        let vos = core.escape().obstacles().map(|&p| (to_v2(p), vr)).collect();
+        let vos = core
+            .escape()
+            .obstacles()
+            .map(|v| (to_v2(v.centre), vr))
+            .collect();
         (rem, mid, vos, core.escape().dropped() as usize)
     }
 }

@@ -110,7 +110,7 @@ pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace 
 
 /// The traces the firmware checks replay: a trap, a paper world, a dense
 /// world, each long enough to fill the collision memory, and a dead end
-/// where the escape drops virtual obstacles (15 by the end), whose forces
+/// where the escape drops virtual obstacles, whose forces
 /// make the most expensive steps.
 pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
     [

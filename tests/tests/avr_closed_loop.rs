@@ -15,12 +15,16 @@ fn reaches(rel: &str) {
     assert_eq!(run.outcome, LoopOutcome::Reached, "{}", sc.name);
     // The firmware stops when its odometry says it is within 50 mm; the
     // true error adds the odometry drift (1 mm ticks, 0.43° heading steps),
-    // which reaches ~1 % of the distance driven: allow 0.25 m.
+    // which grows with the distance driven (about 1 % of it on these runs):
+    // allow 0.1 m plus 1.5 % of the path.
+    let bound_m = 0.1 + 0.015 * run.path_m;
     assert!(
-        run.to_goal_m < 0.25,
-        "{}: {:.3} m from the goal",
+        run.to_goal_m < bound_m,
+        "{}: {:.3} m from the goal after {:.2} m (bound {:.3} m)",
         sc.name,
-        run.to_goal_m
+        run.to_goal_m,
+        run.path_m,
+        bound_m
     );
 }
 
