@@ -107,19 +107,21 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
     let (c, s) = (relative.cos(), relative.sin());
     let mut free = (reach - rs).max(0);
     for (&r, dir) in readings.iter().zip(cfg.sensor_dirs.iter()) {
-        let (e, obstacle) = match r {
-            Reading::Range(mm) => (cfg.sensor_offset_mm as i32 + mm as i32, true),
-            Reading::Clear => (reach, false),
-            Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm as i32, true),
+        // A clear beam never lowers `free`: its end is `reach` from the
+        // centre at some angle δ from the path, and the disc meets it after
+        // reach·cos δ − √(rs² − reach²·sin² δ), which grows with |δ| from
+        // its value at δ = 0, reach − rs, where `free` starts.
+        let e = match r {
+            Reading::Range(mm) => cfg.sensor_offset_mm as i32 + mm as i32,
+            Reading::Clear => continue,
+            Reading::TooClose | Reading::Implausible => cfg.sensor_offset_mm as i32,
         };
         // The beam end in the robot frame, then in the frame of `relative`.
         let (x, y) = dir.scaled(e);
         let along = mul_q14(x, c) + mul_q14(y, s);
         let lateral = mul_q14(y, c) - mul_q14(x, s);
         if lateral.abs() < rs {
-            if obstacle {
-                free = free.min((along - standoff).max(0));
-            }
+            free = free.min((along - standoff).max(0));
             // The chord can only lower `free` if `along − rs` is below it
             // (the half chord is at most rs): skip the square root otherwise.
             if along - rs < free {

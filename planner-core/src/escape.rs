@@ -219,12 +219,7 @@ impl Escape {
                 .front()
                 .is_some_and(|&p| within(p, robot, cfg.stuck_mm));
         // Loop: back near an old breadcrumb.
-        let n = self.crumbs.len();
-        let looped = self
-            .crumbs
-            .iter()
-            .take(n.saturating_sub(2))
-            .any(|&c| within(c, robot, cfg.revisit_mm));
+        let looped = self.revisits(robot, cfg.revisit_mm);
         if self
             .crumbs
             .back()
@@ -244,6 +239,17 @@ impl Escape {
         }
         self.drop(cfg, robot);
         Verdict::Dropped
+    }
+
+    /// Whether `robot` is within `r_mm` of a breadcrumb other than the two
+    /// newest. Runs every cycle over the whole trail: plain loops over the
+    /// deque's two slices.
+    fn revisits(&self, robot: Point, r_mm: u16) -> bool {
+        let old = self.crumbs.len().saturating_sub(2);
+        let (a, b) = self.crumbs.as_slices();
+        let (a_old, b_old) = (old.min(a.len()), old.saturating_sub(a.len()));
+        a.get(..a_old).is_some_and(|s| any_within(s, robot, r_mm))
+            || b.get(..b_old).is_some_and(|s| any_within(s, robot, r_mm))
     }
 
     /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
@@ -335,6 +341,19 @@ impl Escape {
     }
 }
 
+/// Whether any of `points` is within `r_mm` of `robot`: a one-compare-per-
+/// axis box test first, the exact distance only inside the box. Out of line:
+/// it runs on both halves of a deque, and the AVR pays for each copy.
+#[inline(never)]
+fn any_within(points: &[Point], robot: Point, r_mm: u16) -> bool {
+    let m = r_mm as i32 - 1;
+    points.iter().any(|c| {
+        (c.x as i32 - robot.x as i32 + m) as u32 <= 2 * m as u32
+            && (c.y as i32 - robot.y as i32 + m) as u32 <= 2 * m as u32
+            && within(*c, robot, r_mm)
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -361,6 +380,29 @@ mod tests {
         // Two drops without a new best distance: give up.
         assert_eq!(e.observe(&cfg, p, 2_000), Verdict::GiveUp);
         assert_eq!(e.dropped(), 2);
+    }
+
+    proptest::proptest! {
+        /// The trail scan finds a revisit exactly when the plain scan over
+        /// all but the two newest crumbs does, wherever the deque wraps.
+        #[test]
+        fn revisits_matches_the_plain_scan(
+            trail in proptest::collection::vec((-600i16..600, -600i16..600), 0..40),
+            (x, y) in (-600i16..600, -600i16..600),
+            r in 0u16..400,
+        ) {
+            let mut e = Escape::new();
+            for &(cx, cy) in &trail {
+                if e.crumbs.is_full() {
+                    e.crumbs.pop_front();
+                }
+                let _ = e.crumbs.push_back(Point::new(cx, cy));
+            }
+            let robot = Point::new(x, y);
+            let n = e.crumbs.len();
+            let plain = e.crumbs.iter().take(n.saturating_sub(2)).any(|&c| within(c, robot, r));
+            proptest::prop_assert_eq!(e.revisits(robot, r), plain);
+        }
     }
 
     #[test]
