@@ -33,6 +33,8 @@ pub struct Row {
     pub solvable: bool,
     /// The file.
     pub file: PathBuf,
+    /// Seed of the run's sensor noise and slip.
+    pub seed: u64,
 }
 
 impl Row {
@@ -91,6 +93,7 @@ pub fn run_all(
                 virtual_obstacles: res.virtual_dropped,
                 solvable: sc.solvable,
                 file: file.clone(),
+                seed: cfg.seed,
             }
         })
         .collect();

@@ -50,9 +50,14 @@ enum Cmd {
         /// Planner.
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
-        /// Seed.
+        /// Seed (the first one with `--seeds`).
         #[arg(long, default_value_t = 1)]
         seed: u64,
+        /// Run every scenario with this many consecutive seeds and print
+        /// one summary line per seed and one over all runs (one seed's
+        /// outcomes swing with small planner changes; compare aggregates).
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        seeds: u64,
         /// Worker threads (default: all cores).
         #[arg(long)]
         jobs: Option<usize>,
@@ -154,6 +159,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             paths,
             planner,
             seed,
+            seeds,
             jobs,
             json,
             summary,
@@ -169,14 +175,25 @@ fn real_main(cli: Cli) -> Result<(), String> {
             if files.is_empty() {
                 return Err("no scenario files found".into());
             }
-            let cfg = SimConfig {
-                planner,
-                seed,
-                sensors: sensors(perfect),
-                ..SimConfig::default()
-            };
-            let rows = bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?;
-            print!("{}", bench::table(&rows, summary));
+            let mut rows = Vec::new();
+            for seed in seed..seed.saturating_add(seeds) {
+                let cfg = SimConfig {
+                    planner,
+                    seed,
+                    sensors: sensors(perfect),
+                    ..SimConfig::default()
+                };
+                let mut these = bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?;
+                if seeds > 1 {
+                    print!("seed {seed}: {}", bench::table(&these, true));
+                }
+                rows.append(&mut these);
+            }
+            if seeds > 1 {
+                print!("all seeds: {}", bench::table(&rows, true));
+            } else {
+                print!("{}", bench::table(&rows, summary));
+            }
             if let Some(out) = json {
                 let lines: Vec<String> = rows
                     .iter()

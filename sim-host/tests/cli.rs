@@ -1,0 +1,54 @@
+//! The command line as users call it.
+
+use std::path::PathBuf;
+use std::process::Command;
+
+fn corridor() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/traps/corridor.toml")
+}
+
+#[test]
+fn bench_over_several_seeds_prints_each_and_the_aggregate() {
+    let dir = std::env::temp_dir().join(format!("sim-host-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("runs.jsonl");
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["bench", "--seed", "4", "--seeds", "2", "--json"])
+        .arg(&json)
+        .arg(corridor())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(lines[0].starts_with("seed 4: runs 1 |"), "{text}");
+    assert!(lines[1].starts_with("seed 5: runs 1 |"), "{text}");
+    assert!(lines[2].starts_with("all seeds: runs 2 |"), "{text}");
+    let seeds: Vec<u64> = std::fs::read_to_string(&json)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["seed"]
+                .as_u64()
+                .unwrap()
+        })
+        .collect();
+    assert_eq!(seeds, [4, 5]);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn zero_seeds_is_a_usage_error() {
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["bench", "--seeds", "0"])
+        .arg(corridor())
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--seeds"));
+}
