@@ -346,6 +346,10 @@ impl Escape {
 /// it runs on both halves of a deque, and the AVR pays for each copy.
 #[inline(never)]
 fn any_within(points: &[Point], robot: Point, r_mm: u16) -> bool {
+    if r_mm == 0 {
+        return false;
+    }
+    // |d| < r per axis as one unsigned compare: d + (r − 1) ≤ 2(r − 1).
     let m = r_mm as i32 - 1;
     points.iter().any(|c| {
         (c.x as i32 - robot.x as i32 + m) as u32 <= 2 * m as u32
@@ -403,6 +407,15 @@ mod tests {
             let plain = e.crumbs.iter().take(n.saturating_sub(2)).any(|&c| within(c, robot, r));
             proptest::prop_assert_eq!(e.revisits(robot, r), plain);
         }
+    }
+
+    #[test]
+    fn a_zero_revisit_distance_finds_nothing() {
+        // (Found by the proptest above: the box test overflowed for 0 in
+        // debug builds.)
+        let p = Point::new(5, -5);
+        assert!(!any_within(&[p, p], p, 0));
+        assert!(any_within(&[p, p], p, 1));
     }
 
     #[test]
