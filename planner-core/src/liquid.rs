@@ -125,9 +125,9 @@ pub enum LiquidError {
 }
 
 /// Potential value standing for "infinite" (inside an obstacle).
-const INFINITE: u64 = u64::MAX;
+pub const INFINITE: u64 = u64::MAX;
 /// Fixed-point scale of the potential.
-const SCALE: u64 = 1 << 16;
+pub const SCALE: u64 = 1 << 16;
 
 /// The potential at `x` (paper §3), in units of `1/SCALE`; [`INFINITE`]
 /// inside an (inflated) obstacle, a virtual obstacle or out of bounds.

@@ -5,8 +5,8 @@
 //! planner logic of its own. Modules: [`scenario`] (format 1 files),
 //! [`geom`] and [`world`] (exact ray casting and swept collision),
 //! [`sensor`] (the IR curve, noise, 38 ms updates), [`sim`] (rover, guard,
-//! odometry, outcomes), [`reference`] (shortest paths), [`planners`] (unit
-//! conversion to the core), [`bench`], [`svg`], [`generate`].
+//! odometry, outcomes), [`reference`](mod@reference) (shortest paths), [`planners`] (unit
+//! conversion to the core), [`bench`](mod@bench), [`svg`], [`generate`].
 //!
 //! Crates: `serde` + `toml` for scenario files (typed, unknown keys refused),
 //! `clap` for the CLI, `rayon` and `indicatif` for parallel benches with a
