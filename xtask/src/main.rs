@@ -227,6 +227,13 @@ fn ci() {
         &["clippy", "--release", "--", "-D", "warnings"],
         &[],
     );
+    // The API docs build without warnings (broken or private links).
+    run(
+        &dir,
+        "cargo",
+        &["+stable", "doc", "--workspace", "--no-deps", "--quiet"],
+        &[("RUSTDOCFLAGS", "-D warnings")],
+    );
     // The host tests include the emulated firmware tests (they build the
     // firmware themselves).
     run(&dir, "cargo", &["+stable", "test", "--workspace"], &[]);
