@@ -162,6 +162,9 @@ impl Memory {
         target: Point,
         diagonal_tolerance: Angle,
     ) -> usize {
+        if points.is_empty() {
+            return 0;
+        }
         let class = direction_class(heading, diagonal_tolerance);
         let span = Span::new(robot, target);
         // One pass over the memory picks the points a new one could merge
