@@ -237,7 +237,7 @@ impl Escape {
         if looped {
             self.crumbs.clear();
         }
-        self.drop(cfg, robot);
+        self.drop_at(robot, cfg);
         Verdict::Dropped
     }
 
@@ -253,10 +253,7 @@ impl Escape {
     }
 
     /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
-    pub fn drop(&mut self, cfg: &EscapeConfig, robot: Point) {
-        if !cfg.enabled {
-            return;
-        }
+    fn drop_at(&mut self, robot: Point, cfg: &EscapeConfig) {
         self.drops_since_best = self.drops_since_best.saturating_add(1);
         let held = self
             .obstacles
@@ -341,21 +338,11 @@ impl Escape {
     }
 }
 
-/// Whether any of `points` is within `r_mm` of `robot`: a one-compare-per-
-/// axis box test first, the exact distance only inside the box. Out of line:
-/// it runs on both halves of a deque, and the AVR pays for each copy.
+/// Whether any of `points` is within `r_mm` of `robot`. Out of line: it
+/// runs on both halves of a deque, and the AVR pays for each copy.
 #[inline(never)]
 fn any_within(points: &[Point], robot: Point, r_mm: u16) -> bool {
-    if r_mm == 0 {
-        return false;
-    }
-    // |d| < r per axis as one unsigned compare: d + (r − 1) ≤ 2(r − 1).
-    let m = r_mm as i32 - 1;
-    points.iter().any(|c| {
-        (c.x as i32 - robot.x as i32 + m) as u32 <= 2 * m as u32
-            && (c.y as i32 - robot.y as i32 + m) as u32 <= 2 * m as u32
-            && within(*c, robot, r_mm)
-    })
+    points.iter().any(|&c| within(c, robot, r_mm))
 }
 
 #[cfg(test)]
@@ -513,7 +500,6 @@ mod tests {
             e.force(&cfg, Point::new(5_657, 1), Angle::ZERO),
             Force::ZERO
         );
-        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
         // Exactly on it: away from the goal.
         let f = e.force(&cfg, Point::new(0, 0), Angle::ZERO);
         assert!(f.x < -44 * 1024 && f.y == 0, "{f:?}");

@@ -250,6 +250,20 @@ pub fn within(a: Point, b: Point, r_mm: u16) -> bool {
     (ux * ux).saturating_add(uy * uy) < (r as u32) * (r as u32)
 }
 
+/// Whether `a` and `b` are less than `r_mm` apart on each axis (Chebyshev
+/// distance below `r_mm`): the memory's merge test.
+pub fn box_within(a: Point, b: Point, r_mm: u16) -> bool {
+    if r_mm == 0 {
+        return false;
+    }
+    // |d| < r per axis as one unsigned compare: d + (r − 1) ≤ 2(r − 1)
+    // (the memory and the escape run it over every point they hold, every
+    // cycle).
+    let m = r_mm as i32 - 1;
+    let close = |a: i16, b: i16| (a as i32 - b as i32 + m) as u32 <= 2 * m as u32;
+    close(a.x, b.x) && close(a.y, b.y)
+}
+
 /// A point of the world in millimetres (world frame, x right, y up).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -290,6 +304,11 @@ impl Point {
 
     /// The point `distance_mm` away along `dir`.
     pub fn offset(self, dir: Angle, distance_mm: u16) -> Point {
+        self.offset_dir(Dir::of(dir), distance_mm)
+    }
+
+    /// The point `distance_mm` away along the unit vector `dir`.
+    pub fn offset_dir(self, dir: Dir, distance_mm: u16) -> Point {
         let (dx, dy) = dir.scaled(distance_mm as i32);
         Point::saturating(self.x as i32 + dx, self.y as i32 + dy)
     }
@@ -398,8 +417,7 @@ impl Force {
 
     /// A force of `magnitude` (Q10) pointing along `dir`.
     pub fn along(dir: Angle, magnitude: i32) -> Force {
-        let (x, y) = dir.scaled(magnitude);
-        Force { x, y }
+        Force::along_dir(Dir::of(dir), magnitude)
     }
 
     /// Component-wise saturating sum.

@@ -3,7 +3,7 @@
 //! inconsistent; the directions are the design).
 
 use crate::config::Config;
-use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force, Point};
+use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force};
 use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// A collision point: a reading inside the swept corridor of the next step.
@@ -57,20 +57,10 @@ pub fn attractive(cfg: &Config, bearing: Angle) -> Force {
     Force::along(bearing, cfg.xi_att)
 }
 
-/// Repulsive force (eqs. 9, 10): `Σ (P_R − P_Ci) / d³`, i.e. a unit vector
-/// away from each collision point scaled by `1/d²`. `heading` is the
-/// robot's heading as a unit vector.
-pub fn repulsive(cfg: &Config, heading: Dir, points: &[CollisionPoint]) -> Force {
-    let mut f = Force::ZERO;
-    for p in points {
-        let toward = sensor_direction(cfg, heading, p.sensor as usize);
-        f = f.plus(repulsion(toward, p.distance_mm));
-    }
-    f
-}
-
 /// Eq. 10 for one collision point `distance_mm` away along the world
-/// direction `toward`: `1/d²` pointing back from it.
+/// direction `toward`: `1/d²` pointing back from it. The repulsive force
+/// (eq. 9, `Σ (P_R − P_Ci) / d³`) is the sum over the cycle's collision
+/// points; the planner sums it in the loop that also places them.
 pub fn repulsion(toward: Dir, distance_mm: u16) -> Force {
     Force::along_dir(-toward, inverse_square_force(distance_mm))
 }
@@ -141,13 +131,6 @@ pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings
     f
 }
 
-/// World position of an obstacle `distance_mm` from `robot` along the world
-/// direction `toward`.
-pub fn world_point(robot: Point, toward: Dir, distance_mm: u16) -> Point {
-    let (dx, dy) = toward.scaled(distance_mm as i32);
-    Point::saturating(robot.x as i32 + dx, robot.y as i32 + dy)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -189,6 +172,16 @@ mod tests {
     fn attractive_force_by_hand() {
         // ξ_att = 2 towards 90°: (0, 2) force units = (0, 2048) in Q10.
         assert_eq!(attractive(&cfg(), Angle::QUARTER), Force { x: 0, y: 2_048 });
+    }
+
+    /// Eq. 9 summed as the planner sums it.
+    fn repulsive(cfg: &Config, heading: Dir, points: &[CollisionPoint]) -> Force {
+        points.iter().fold(Force::ZERO, |f, p| {
+            f.plus(repulsion(
+                sensor_direction(cfg, heading, p.sensor as usize),
+                p.distance_mm,
+            ))
+        })
     }
 
     #[test]

@@ -202,7 +202,7 @@ impl Planner {
             let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
             let _ = self
                 .last_points
-                .push(forces::world_point(robot, toward, p.distance_mm));
+                .push(robot.offset_dir(toward, p.distance_mm));
             repulsive = repulsive.plus(forces::repulsion(toward, p.distance_mm));
         }
         self.memory.remember_all(
@@ -275,6 +275,8 @@ impl Planner {
             self.turn_side = 0;
         }
         let free = |relative: Angle| command::free_distance_mm(cfg, &readings, relative);
+        // Steps shorter than the executor can make are none.
+        let at_least_min = |step: u16| if step < cfg.min_step_mm { 0 } else { step };
         let mut step = if relative.abs_signed() > half.0 {
             0
         } else {
@@ -283,9 +285,7 @@ impl Planner {
         if near {
             step = step.min(goal_mm);
         }
-        if step < cfg.min_step_mm {
-            step = 0;
-        }
+        step = at_least_min(step);
         // Ours: two turns on the spot in a row with nothing in sight is the
         // start of a livelock (turn to the force, see the obstacle, turn
         // away, lose sight of it, turn back). Break it by advancing along
@@ -293,10 +293,7 @@ impl Planner {
         let spin = step == 0 && points.is_empty() && relative.abs_signed() > half.0;
         if spin && self.spun {
             heading = pose.heading;
-            step = self.paper_step_mm.min(free(Angle::ZERO)) / 2;
-            if step < cfg.min_step_mm {
-                step = 0;
-            }
+            step = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
         }
         self.spun = spin && step == 0;
         Output {
@@ -447,7 +444,7 @@ mod tests {
             c.sensor_offset_mm() + c.sensor_range_mm() - c.robot_radius_mm() - c.clearance_mm();
         assert_eq!(out.step_mm, free / 2);
         // After that advance, a pure turn is allowed again.
-        let out = p.step_raw(at(0, 390, 0), &[0; 5]).command;
+        let out = p.step_raw(at(0, (free / 2) as i16, 0), &[0; 5]).command;
         assert_eq!(out.step_mm, 0);
     }
 

@@ -16,7 +16,7 @@
 //! with near-copies). When the memory is full the *oldest* point is evicted:
 //! the most recent obstacles are the ones the robot is dealing with.
 
-use crate::fixed::{Angle, Point};
+use crate::fixed::{box_within, Angle, Point};
 use heapless::Vec;
 
 /// Most remembered collision points.
@@ -26,13 +26,9 @@ pub const MEMORY_CAPACITY: usize = 16;
 /// the same class are merged into it.
 pub const MERGE_MM: u16 = 60;
 
-/// Whether two points are nearer than [`MERGE_MM`] on both axes: |d| <
-/// MERGE_MM as one unsigned compare of d + MERGE_MM − 1 (the merge scan runs
-/// over the whole memory every cycle).
+/// Whether two points are nearer than [`MERGE_MM`] on both axes.
 fn near(a: Point, b: Point) -> bool {
-    const M: i32 = MERGE_MM as i32 - 1;
-    let close = |a: i16, b: i16| (a as i32 - b as i32 + M) as u32 <= 2 * M as u32;
-    close(a.x, b.x) && close(a.y, b.y)
+    box_within(a, b, MERGE_MM)
 }
 
 /// The class of a remembered point (eqs. 11–13).
@@ -70,19 +66,32 @@ struct Span {
 
 impl Span {
     fn new(robot: Point, target: Point) -> Span {
+        Span::around(robot, target, 0)
+    }
+
+    /// The box with corners `a` and `b`, widened by `margin` on every side.
+    fn around(a: Point, b: Point, margin: u16) -> Span {
+        let m = margin as i32;
         Span {
-            x_lo: robot.x.min(target.x) as i32,
-            x_len: robot.x.abs_diff(target.x) as u32,
-            y_lo: robot.y.min(target.y) as i32,
-            y_len: robot.y.abs_diff(target.y) as u32,
+            x_lo: a.x.min(b.x) as i32 - m,
+            x_len: a.x.abs_diff(b.x) as u32 + 2 * m as u32,
+            y_lo: a.y.min(b.y) as i32 - m,
+            y_len: a.y.abs_diff(b.y) as u32 + 2 * m as u32,
         }
     }
 
-    /// Whether `p`'s class finds it between robot and target. One unsigned
-    /// compare per axis: below `lo`, the difference wraps above the span.
+    /// Whether `p` lies inside on x, on y. One unsigned compare per axis:
+    /// below `lo`, the difference wraps above the span.
+    fn axes(&self, p: Point) -> (bool, bool) {
+        (
+            (p.x as i32 - self.x_lo) as u32 <= self.x_len,
+            (p.y as i32 - self.y_lo) as u32 <= self.y_len,
+        )
+    }
+
+    /// Whether `p`'s class finds it between robot and target.
     fn holds(&self, p: &Remembered) -> bool {
-        let in_x = (p.point.x as i32 - self.x_lo) as u32 <= self.x_len;
-        let in_y = (p.point.y as i32 - self.y_lo) as u32 <= self.y_len;
+        let (in_x, in_y) = self.axes(p.point);
         // The class's discriminant has one bit per axis it must lie
         // between: it holds when no needed bit is missing.
         let inside = in_x as u8 | (in_y as u8) << 1;
@@ -177,18 +186,10 @@ impl Memory {
             lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
             hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
         }
-        let m = MERGE_MM as i32;
-        let (x_lo, y_lo) = (lo.x as i32 - m, lo.y as i32 - m);
-        let (x_len, y_len) = (
-            (hi.x as i32 - lo.x as i32 + 2 * m) as u32,
-            (hi.y as i32 - lo.y as i32 + 2 * m) as u32,
-        );
+        let reach = Span::around(lo, hi, MERGE_MM);
         let mut candidates: Vec<u8, MEMORY_CAPACITY> = Vec::new();
         for (i, q) in self.points.iter().enumerate() {
-            if q.class == class
-                && (q.point.x as i32 - x_lo) as u32 <= x_len
-                && (q.point.y as i32 - y_lo) as u32 <= y_len
-            {
+            if q.class == class && reach.axes(q.point) == (true, true) {
                 let _ = candidates.push(i as u8);
             }
         }
