@@ -122,6 +122,9 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
         let lateral = mul_q14(y, c) - mul_q14(x, s);
         if lateral.abs() < rs {
             free = free.min((along - standoff).max(0));
+            if free == 0 {
+                break;
+            }
             // The chord can only lower `free` if `along − rs` is below it
             // (the half chord is at most rs): skip the square root otherwise.
             if along - rs < free {

@@ -44,6 +44,7 @@ use crate::fixed::{
     hypot, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
     MAX_SCALED,
 };
+use crate::ring::Ring;
 use heapless::Deque;
 
 /// Most virtual obstacles kept.
@@ -164,7 +165,7 @@ pub struct Escape {
     dropped: u16,
     recent: Deque<Point, WINDOW_CAPACITY>,
     crumbs: Deque<Point, CRUMB_CAPACITY>,
-    obstacles: Deque<VirtualObstacle, VIRTUAL_CAPACITY>,
+    obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
 }
 
 impl Default for Escape {
@@ -183,7 +184,7 @@ impl Escape {
             dropped: 0,
             recent: Deque::new(),
             crumbs: Deque::new(),
-            obstacles: Deque::new(),
+            obstacles: Ring::new(),
         }
     }
 
@@ -262,12 +263,7 @@ impl Escape {
         if let Some(v) = held {
             *v = VirtualObstacle::new(cfg, v.centre, v.weight.saturating_add(1));
         } else {
-            if self.obstacles.is_full() {
-                self.obstacles.pop_front();
-            }
-            let _ = self
-                .obstacles
-                .push_back(VirtualObstacle::new(cfg, robot, 1));
+            self.obstacles.push(VirtualObstacle::new(cfg, robot, 1));
         }
         self.dropped = self.dropped.saturating_add(1);
     }
@@ -278,9 +274,10 @@ impl Escape {
     /// its true distance), computed as components: no angle, so no `atan2`
     /// and no sine per obstacle.
     pub fn force(&self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
+        // In slot order: the sum cannot saturate (at most 24 terms below
+        // 2^25 each), so the order does not change it.
         let mut f = Force::ZERO;
-        let (older, newer) = self.obstacles.as_slices();
-        for v in older.iter().chain(newer) {
+        for v in self.obstacles.as_slice() {
             let (dx, dy) = v.centre.to(robot);
             let reach = v.reach_mm as u32;
             if dx.unsigned_abs() >= reach || dy.unsigned_abs() >= reach {
@@ -464,8 +461,7 @@ mod tests {
         };
         let mut e = Escape::new();
         e.obstacles
-            .push_back(VirtualObstacle::new(&cfg, Point::new(0, 0), 1))
-            .unwrap();
+            .push(VirtualObstacle::new(&cfg, Point::new(0, 0), 1));
         // K_v = 1, rover 500 mm to the right: 1/0.5² = 4 units along +x.
         assert_eq!(
             e.force(&cfg, Point::new(500, 0), Angle::ZERO),
@@ -475,14 +471,14 @@ mod tests {
         let f = e.force(&cfg, Point::new(0, 100), Angle::ZERO);
         assert_eq!((f.x, f.y / 1024), (0, 44));
         // Weight 3 repels three times as hard.
-        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 3);
+        *e.obstacles.iter_mut().next().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 3);
         assert_eq!(
             e.force(&cfg, Point::new(500, 0), Angle::ZERO),
             Force { x: 3 * 4_096, y: 0 }
         );
         // Weight 1 reaches to where 1/d² = 1/32: √32 m = 5.657 m; just
         // inside it pushes with 1/32 unit, at it not at all.
-        *e.obstacles.front_mut().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
+        *e.obstacles.iter_mut().next().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
         assert_eq!(e.obstacles().next().unwrap().reach_mm, 5_657);
         let f = e.force(&cfg, Point::new(5_656, 0), Angle::ZERO);
         assert_eq!(

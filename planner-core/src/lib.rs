@@ -48,6 +48,7 @@ pub mod forces;
 pub mod liquid;
 pub mod memory;
 pub mod protocol;
+pub mod ring;
 pub mod sensors;
 
 pub use command::{Command, Guard, Output, Status};

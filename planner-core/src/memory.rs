@@ -17,6 +17,8 @@
 //! the most recent obstacles are the ones the robot is dealing with.
 
 use crate::fixed::{box_within, Angle, Point};
+use crate::ring::Ring;
+use crate::sensors::SENSOR_COUNT;
 use heapless::Vec;
 
 /// Most remembered collision points.
@@ -124,25 +126,18 @@ pub fn direction_class(heading: Angle, diagonal_tolerance: Angle) -> PointClass 
     }
 }
 
-/// The bounded memory of collision points.
-///
-/// A `heapless::Vec` used as a ring: while not full new points are pushed;
-/// once full, the point at `oldest` is overwritten and `oldest` moves on.
-/// The points stay one contiguous slice, so the scans that run every cycle
-/// (merging, the midpoint) are single tight loops (a wrapping deque makes
-/// each of them two).
+/// The bounded memory of collision points: a [`Ring`], so that the scans
+/// that run every cycle (merging, the midpoint) are single tight loops.
 #[derive(Clone, Debug, Default)]
 pub struct Memory {
-    points: Vec<Remembered, MEMORY_CAPACITY>,
-    oldest: usize,
+    points: Ring<Remembered, MEMORY_CAPACITY>,
 }
 
 impl Memory {
     /// An empty memory.
     pub const fn new() -> Self {
         Memory {
-            points: Vec::new(),
-            oldest: 0,
+            points: Ring::new(),
         }
     }
 
@@ -171,66 +166,57 @@ impl Memory {
         target: Point,
         diagonal_tolerance: Angle,
     ) -> usize {
-        if points.is_empty() {
-            return 0;
-        }
         let class = direction_class(heading, diagonal_tolerance);
         let span = Span::new(robot, target);
+        // Only the points the span's rule keeps can be stored or merged.
+        let mut kept: Vec<Point, SENSOR_COUNT> = Vec::new();
+        for &point in points {
+            if span.holds(&Remembered { point, class }) {
+                let _ = kept.push(point);
+            }
+        }
+        if kept.is_empty() {
+            return 0;
+        }
         // One pass over the memory picks the points a new one could merge
-        // into: same class, inside the box around this cycle's points
+        // into: same class, inside the box around this cycle's kept points
         // widened by the merge distance. The per-point scans then run over
         // these few (a wall seen again), not the whole memory.
         let mut lo = Point::new(i16::MAX, i16::MAX);
         let mut hi = Point::new(i16::MIN, i16::MIN);
-        for p in points {
+        for p in &kept {
             lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
             hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
         }
         let reach = Span::around(lo, hi, MERGE_MM);
-        let mut candidates: Vec<u8, MEMORY_CAPACITY> = Vec::new();
-        for (i, q) in self.points.iter().enumerate() {
-            if q.class == class && reach.axes(q.point) == (true, true) {
-                let _ = candidates.push(i as u8);
+        // The candidates' positions, copied: the per-point scans below then
+        // run over a short contiguous slice.
+        let mut candidates: Vec<Point, MEMORY_CAPACITY> = Vec::new();
+        for q in self.points.as_slice() {
+            let (in_x, in_y) = reach.axes(q.point);
+            if q.class == class && in_x && in_y {
+                let _ = candidates.push(q.point);
             }
         }
         let mut stored = 0;
-        for &point in points {
-            let r = Remembered { point, class };
-            if !span.holds(&r) {
+        for &point in &kept {
+            if candidates.iter().any(|&q| near(q, point)) {
                 continue;
             }
-            let known = candidates.iter().any(|&i| {
-                self.points
-                    .get(i as usize)
-                    .is_some_and(|q| near(q.point, point))
-            });
-            if known {
-                continue;
+            // Later points of this cycle may merge into this one; the point
+            // it evicted (if any) can no longer take merges. At most one
+            // entry per stored point: never more than the capacity.
+            if let Some(gone) = self.points.push(Remembered { point, class }) {
+                if gone.class == class {
+                    if let Some(i) = candidates.iter().position(|&q| q == gone.point) {
+                        candidates.swap_remove(i);
+                    }
+                }
             }
-            let slot = self.store(r);
-            // The slot now holds `r` (in place of an evicted point, which
-            // can no longer take merges): later points of this cycle may
-            // merge into it. Distinct slots: never more than the capacity.
-            if !candidates.contains(&slot) {
-                let _ = candidates.push(slot);
-            }
+            let _ = candidates.push(point);
             stored += 1;
         }
         stored
-    }
-
-    /// Keep `r`; when full, in place of the oldest point. Returns its slot.
-    fn store(&mut self, r: Remembered) -> u8 {
-        let len = self.points.len();
-        if self.points.push(r).is_ok() {
-            return len as u8;
-        }
-        let slot = self.oldest;
-        if let Some(q) = self.points.get_mut(slot) {
-            *q = r;
-        }
-        self.oldest = (slot + 1) % MEMORY_CAPACITY;
-        slot as u8
     }
 
     /// `(n, Σ(P_R − P_i))` over the active points: the direction of
@@ -239,7 +225,7 @@ impl Memory {
         let mut n = 0u8;
         let (mut sx, mut sy) = (0i32, 0i32);
         let span = Span::new(robot, target);
-        for p in self.points.iter().filter(|p| span.holds(p)) {
+        for p in self.points.as_slice().iter().filter(|p| span.holds(p)) {
             sx += p.point.x as i32;
             sy += p.point.y as i32;
             n += 1;
@@ -264,11 +250,7 @@ impl Memory {
 
     /// All remembered points, oldest first.
     pub fn iter(&self) -> impl Iterator<Item = &Remembered> {
-        let (newer, older) = self
-            .points
-            .split_at_checked(self.oldest)
-            .unwrap_or_default();
-        older.iter().chain(newer)
+        self.points.iter()
     }
 
     /// Number of remembered points.
@@ -414,8 +396,9 @@ mod tests {
                     .count();
                 let n = a.remember_all(&pts, robot, heading, target, TOL);
                 proptest::prop_assert_eq!(n, m);
-                proptest::prop_assert!(a.points.iter().eq(model.iter()));
-                proptest::prop_assert_eq!(a.oldest, oldest);
+                proptest::prop_assert!(a.points.as_slice().iter().eq(model.iter()));
+                let (newer, older) = model.split_at(oldest);
+                proptest::prop_assert!(a.iter().eq(older.iter().chain(newer)));
             }
         }
     }
