@@ -5,8 +5,8 @@
 //! with fresh readings and stops short if something appears.
 
 use crate::config::Config;
-use crate::fixed::{isqrt, mul_q14, Angle};
-use crate::sensors::{Reading, Readings};
+use crate::fixed::{isqrt, mul_q14, Angle, Dir};
+use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// One cycle's command: turn in place to `heading` (world frame), then
 /// advance `step_mm` straight ahead.
@@ -104,7 +104,13 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
     let rs = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
     let reach = (cfg.sensor_offset_mm + cfg.sensor_range_mm) as i32;
     let standoff = (cfg.sensor_offset_mm + cfg.standoff_mm) as i32;
-    let (c, s) = (relative.cos(), relative.sin());
+    // The usual headings are a sensor's (straight ahead, a sector edge):
+    // their sine and cosine are in the config already.
+    let dir = match cfg.sensor_angles.iter().position(|&a| a == relative) {
+        Some(i) => cfg.sensor_dirs[i % SENSOR_COUNT],
+        None => Dir::of(relative),
+    };
+    let (c, s) = (dir.c, dir.s);
     let mut free = (reach - rs).max(0);
     for (&r, dir) in readings.iter().zip(cfg.sensor_dirs.iter()) {
         // A clear beam never lowers `free`: its end is `reach` from the

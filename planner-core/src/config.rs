@@ -43,6 +43,10 @@ pub struct Config {
     pub(crate) sensor_angles: [Angle; SENSOR_COUNT],
     /// Q14 (cos, sin) of each sensor angle, precomputed.
     pub(crate) sensor_dirs: [Dir; SENSOR_COUNT],
+    /// Per sensor, the farthest obstacle distance (mm from the centre)
+    /// whose point lies inside the corridor (eq. 7's lateral test),
+    /// precomputed.
+    pub(crate) corridor_mm: [u16; SENSOR_COUNT],
     pub(crate) xi_att: i32,
     pub(crate) xi_mp: i32,
     pub(crate) xi_sen: i32,
@@ -270,12 +274,15 @@ impl ConfigBuilder {
         let calibration = [c.clone(), c.clone(), c.clone(), c.clone(), c];
         let angles = a.map(Angle::from_deg);
         let sensor_dirs = angles.map(Dir::of);
+        let half_width = self.robot_radius_mm + self.clearance_mm;
+        let corridor_mm = sensor_dirs.map(|d| corridor_mm(d, half_width));
         Ok(Config {
             robot_radius_mm: self.robot_radius_mm,
             sensor_offset_mm: offset,
             sensor_range_mm: self.sensor_range_mm,
             sensor_angles: angles,
             sensor_dirs,
+            corridor_mm,
             xi_att: self.xi_att,
             xi_mp: self.xi_mp,
             xi_sen: self.xi_sen,
@@ -291,9 +298,38 @@ impl ConfigBuilder {
     }
 }
 
+/// The largest `d` (mm) with `mul_q14(d, |sin|) ≤ half_width`: the
+/// lateral test of eq. 7 for a sensor along `dir`, as one compare of the
+/// distance. The product grows with `d`, so the set is `0 ..= d_max`:
+/// `(d·s + 2^13) >> 14 ≤ w` ⇔ `d·s ≤ (w + 1)·2^14 − 2^13 − 1`.
+fn corridor_mm(dir: Dir, half_width: u16) -> u16 {
+    let s = dir.s.unsigned_abs();
+    let limit = (half_width as u32 + 1) * (1 << 14) - (1 << 13) - 1;
+    limit
+        .checked_div(s)
+        .map_or(u16::MAX, |d| d.min(u16::MAX as u32) as u16)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn corridor_limit_is_the_lateral_test() {
+        for deg in [-90, -40, -20, -7, 0, 3, 20, 40, 89] {
+            for w in [20u16, 120, 1_500] {
+                let dir = Dir::of(Angle::from_deg(deg));
+                let d_max = corridor_mm(dir, w);
+                for d in (0..=u16::MAX)
+                    .step_by(7)
+                    .chain([d_max, d_max.saturating_add(1)])
+                {
+                    let lateral = crate::fixed::mul_q14(d as i32, dir.s.abs());
+                    assert_eq!(lateral <= w as i32, d <= d_max, "{deg}° w={w} d={d}");
+                }
+            }
+        }
+    }
 
     fn b() -> ConfigBuilder {
         ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)

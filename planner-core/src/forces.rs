@@ -36,12 +36,11 @@ pub fn collision_points(
     step_mm: u16,
 ) -> heapless::Vec<CollisionPoint, SENSOR_COUNT> {
     let mut out = heapless::Vec::new();
-    let half_width = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
     for (i, (&r, dir)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
         if let Some(d) = obstacle_distance_mm(cfg, r) {
-            let lateral = mul_q14(d as i32, dir.s.abs());
-            let forward = mul_q14(d as i32, dir.c);
-            if lateral <= half_width && forward <= step_mm as i32 {
+            // `d·|sin θs| ≤ radius + clearance` as `d ≤` its precomputed limit.
+            let inside = d <= cfg.corridor_mm[i % SENSOR_COUNT];
+            if inside && mul_q14(d as i32, dir.c) <= step_mm as i32 {
                 let _ = out.push(CollisionPoint {
                     sensor: i as u8,
                     distance_mm: d,

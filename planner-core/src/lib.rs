@@ -167,8 +167,16 @@ impl Planner {
     /// One planner cycle from raw ADC counts (the entry point every front
     /// end shares).
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
-        let mut readings = self.readings(raw);
-        self.fold_back.apply(&mut readings);
+        // Counts to readings and the fold-back filter, one pass.
+        let mut readings = [Reading::Clear; SENSOR_COUNT];
+        for (i, ((r, &count), cal)) in readings
+            .iter_mut()
+            .zip(raw.iter())
+            .zip(self.config.calibration.iter())
+            .enumerate()
+        {
+            *r = self.fold_back.filter(i, cal.reading(count));
+        }
         self.last_readings = readings;
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);

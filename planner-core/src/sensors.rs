@@ -275,17 +275,29 @@ impl FoldBackFilter {
 
     /// Filter this cycle's readings in place.
     pub fn apply(&mut self, readings: &mut Readings) {
-        for (r, last) in readings.iter_mut().zip(self.last_mm.iter_mut()) {
-            let now = match *r {
-                Reading::Range(mm) => mm,
-                Reading::Clear => u16::MAX,
-                Reading::TooClose | Reading::Implausible => 0,
-            };
-            let suspect = *last != 0 && *last <= Self::NEAR_MM && now > last.saturating_mul(2);
-            *last = if now == 0 { 1 } else { now };
-            if suspect {
-                *r = Reading::TooClose;
-            }
+        for (i, r) in readings.iter_mut().enumerate() {
+            *r = self.filter(i, *r);
+        }
+    }
+
+    /// Filter this cycle's reading of sensor `i`.
+    pub fn filter(&mut self, i: usize, r: Reading) -> Reading {
+        let Some(last) = self.last_mm.get_mut(i) else {
+            return r;
+        };
+        let now = match r {
+            Reading::Range(mm) => mm,
+            Reading::Clear => u16::MAX,
+            Reading::TooClose | Reading::Implausible => 0,
+        };
+        // `last` in 1 ..= NEAR_MM, as one unsigned compare.
+        let was_near = last.wrapping_sub(1) < Self::NEAR_MM;
+        let suspect = was_near && now > last.saturating_mul(2);
+        *last = now.max(1);
+        if suspect {
+            Reading::TooClose
+        } else {
+            r
         }
     }
 }
