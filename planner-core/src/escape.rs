@@ -45,6 +45,7 @@ use crate::fixed::{
     MAX_SCALED,
 };
 use crate::ring::Ring;
+use heapless::Deque;
 
 /// Most virtual obstacles kept.
 pub const VIRTUAL_CAPACITY: usize = 24;
@@ -155,48 +156,6 @@ impl VirtualObstacle {
     }
 }
 
-/// The rover's last positions, one per cycle, for the stuck test: a fixed
-/// ring written every cycle (the test needs only the position a window
-/// ago).
-#[derive(Clone, Debug)]
-struct Window {
-    slots: [Point; WINDOW_CAPACITY],
-    next: usize,
-    filled: usize,
-}
-
-impl Window {
-    const fn new() -> Self {
-        Window {
-            slots: [Point::new(0, 0); WINDOW_CAPACITY],
-            next: 0,
-            filled: 0,
-        }
-    }
-
-    fn push(&mut self, p: Point) {
-        if let Some(slot) = self.slots.get_mut(self.next) {
-            *slot = p;
-        }
-        self.next = (self.next + 1) % WINDOW_CAPACITY;
-        self.filled = (self.filled + 1).min(WINDOW_CAPACITY);
-    }
-
-    /// The position `cycles` pushes before the newest (0: the newest),
-    /// if pushed since the last clear.
-    fn back(&self, cycles: usize) -> Option<Point> {
-        if cycles >= self.filled {
-            return None;
-        }
-        let slot = (self.next + 2 * WINDOW_CAPACITY - 1 - cycles) % WINDOW_CAPACITY;
-        self.slots.get(slot).copied()
-    }
-
-    fn clear(&mut self) {
-        self.filled = 0;
-    }
-}
-
 /// Progress monitor and virtual obstacles.
 #[derive(Clone, Debug)]
 pub struct Escape {
@@ -204,8 +163,8 @@ pub struct Escape {
     since_best: u16,
     drops_since_best: u16,
     dropped: u16,
-    recent: Window,
-    crumbs: heapless::Deque<Point, CRUMB_CAPACITY>,
+    recent: Deque<Point, WINDOW_CAPACITY>,
+    crumbs: Deque<Point, CRUMB_CAPACITY>,
     obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
 }
 
@@ -223,8 +182,8 @@ impl Escape {
             since_best: 0,
             drops_since_best: 0,
             dropped: 0,
-            recent: Window::new(),
-            crumbs: heapless::Deque::new(),
+            recent: Deque::new(),
+            crumbs: Deque::new(),
             obstacles: Ring::new(),
         }
     }
@@ -251,11 +210,15 @@ impl Escape {
             return Verdict::GiveUp;
         }
         // Stuck: little net displacement over the window.
-        self.recent.push(robot);
-        let stuck = self
-            .recent
-            .back(cfg.window_steps.saturating_sub(1) as usize)
-            .is_some_and(|p| within(p, robot, cfg.stuck_mm));
+        if self.recent.len() >= cfg.window_steps as usize {
+            self.recent.pop_front();
+        }
+        let _ = self.recent.push_back(robot);
+        let stuck = self.recent.len() >= cfg.window_steps as usize
+            && self
+                .recent
+                .front()
+                .is_some_and(|&p| within(p, robot, cfg.stuck_mm));
         // Loop: back near an old breadcrumb.
         let looped = self.revisits(robot, cfg.revisit_mm);
         if self
@@ -281,7 +244,7 @@ impl Escape {
 
     /// Whether `robot` is within `r_mm` of a breadcrumb other than the two
     /// newest. Runs every cycle over the whole trail: plain loops over the
-    /// ring's two slices.
+    /// deque's two slices.
     fn revisits(&self, robot: Point, r_mm: u16) -> bool {
         let old = self.crumbs.len().saturating_sub(2);
         let (a, b) = self.crumbs.as_slices();
@@ -409,7 +372,7 @@ mod tests {
 
     proptest::proptest! {
         /// The trail scan finds a revisit exactly when the plain scan over
-        /// all but the two newest crumbs does, wherever the ring wraps.
+        /// all but the two newest crumbs does, wherever the deque wraps.
         #[test]
         fn revisits_matches_the_plain_scan(
             trail in proptest::collection::vec((-600i16..600, -600i16..600), 0..40),
@@ -427,34 +390,6 @@ mod tests {
             let n = e.crumbs.len();
             let plain = e.crumbs.iter().take(n.saturating_sub(2)).any(|&c| within(c, robot, r));
             proptest::prop_assert_eq!(e.revisits(robot, r), plain);
-        }
-    }
-
-    proptest::proptest! {
-        /// The window answers "where was the rover k cycles ago" as a list
-        /// of every position since the last clear would.
-        #[test]
-        fn window_recalls_the_positions_since_the_last_clear(
-            ops in proptest::collection::vec(proptest::option::weighted(0.9, (-500i16..500, -500i16..500)), 0..60),
-        ) {
-            let mut w = Window::new();
-            let mut all: std::vec::Vec<Point> = std::vec::Vec::new();
-            for op in ops {
-                match op {
-                    Some((x, y)) => {
-                        w.push(Point::new(x, y));
-                        all.push(Point::new(x, y));
-                    }
-                    None => {
-                        w.clear();
-                        all.clear();
-                    }
-                }
-                for k in 0..WINDOW_CAPACITY + 2 {
-                    let want = (k < WINDOW_CAPACITY && k < all.len()).then(|| all[all.len() - 1 - k]);
-                    proptest::prop_assert_eq!(w.back(k), want);
-                }
-            }
         }
     }
 
