@@ -208,8 +208,14 @@ impl Memory {
             // entry per stored point: never more than the capacity.
             if let Some(gone) = self.points.push(Remembered { point, class }) {
                 if gone.class == class {
+                    // `swap_remove` by hand: heapless's asserts the index,
+                    // which would link a panic into the firmware.
                     if let Some(i) = candidates.iter().position(|&q| q == gone.point) {
-                        candidates.swap_remove(i);
+                        if let Some(last) = candidates.pop() {
+                            if let Some(slot) = candidates.get_mut(i) {
+                                *slot = last;
+                            }
+                        }
                     }
                 }
             }
