@@ -182,7 +182,11 @@ mod tests {
 
     #[test]
     fn free_distance_by_hand() {
-        let c = cfg();
+        // Clearance 20 mm: a 120 mm half-width.
+        let c = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .clearance_mm(20)
+            .build()
+            .unwrap();
         let clear = [Reading::Clear; SENSOR_COUNT];
         // Nothing seen: front reach 900 − 120 = 780 mm.
         assert_eq!(free_distance_mm(&c, &clear, Angle::ZERO), 780);
@@ -207,6 +211,22 @@ mod tests {
         let mut r = clear;
         r[2] = Reading::TooClose;
         assert_eq!(free_distance_mm(&c, &r, Angle::ZERO), 0);
+    }
+
+    #[test]
+    fn the_default_clearance_widens_the_corridor() {
+        // Defaults: radius 100 + clearance 40 = 140 mm.
+        let c = cfg();
+        let clear = [Reading::Clear; SENSOR_COUNT];
+        assert_eq!(free_distance_mm(&c, &clear, Angle::ZERO), 900 - 140);
+        // Heading 20° right with a front obstacle at 400 mm: 136.8 mm to
+        // the side, outside 120 mm but inside 140 mm. Half chord
+        // √(140² − 136.8²) = 29.8, along 375.9: 346.1; the stand-off
+        // 375.9 − 200 = 175.9 is lower.
+        let mut r = clear;
+        r[2] = Reading::Range(300);
+        let got = free_distance_mm(&c, &r, Angle::from_deg(-20));
+        assert!((got as i32 - 176).abs() <= 1, "{got}");
     }
 
     #[test]

@@ -149,7 +149,7 @@ impl ConfigBuilder {
     /// | ξ_MP | 1 | paper eq. 12 |
     /// | ξ (off-sensor) | 1 | paper eq. 14 |
     /// | goal tolerance | 50 mm | ours |
-    /// | clearance | 20 mm | ours: lateral margin of the safety rule (§5) |
+    /// | clearance | 40 mm | ours: lateral margin of the safety rule (§5) and of the collision corridor (eqs. 7, 8); 40 rather than 20 mm because a beam samples one point of an obstacle and a corner between the beams reaches past it (docs/bench.md) |
     /// | stand-off | 100 mm | ours: obstacles ahead stay this far from the sensor faces (the sensor's minimum range, so never in fold-back) |
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
@@ -165,7 +165,7 @@ impl ConfigBuilder {
             xi_mp: FORCE_ONE,
             xi_sen: FORCE_ONE,
             goal_tolerance_mm: 50,
-            clearance_mm: 20,
+            clearance_mm: 40,
             standoff_mm: 100,
             min_step_mm: 10,
             diagonal_tolerance_deg: 5,

@@ -144,7 +144,11 @@ mod tests {
 
     #[test]
     fn collision_point_conditions_by_hand() {
-        let c = cfg();
+        // Clearance 20 mm: a 120 mm half-width.
+        let c = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .clearance_mm(20)
+            .build()
+            .unwrap();
         // Front sensor, 300 mm from the face: D = 400 from the centre,
         // lateral 0, forward 400 ≤ 800 → a collision point.
         let mut r = [Reading::Clear; SENSOR_COUNT];
@@ -165,6 +169,11 @@ mod tests {
         r[2] = Reading::TooClose;
         let cp = collision_points(&c, &r, 800);
         assert_eq!((cp.len(), cp[0].distance_mm), (1, 100));
+        // With the default clearance (40 mm, half-width 140) the +40° point
+        // at D = 200 (lateral 128.6) is one.
+        let mut r = [Reading::Clear; SENSOR_COUNT];
+        r[4] = Reading::Range(100);
+        assert_eq!(collision_points(&cfg(), &r, 800).len(), 1);
     }
 
     #[test]

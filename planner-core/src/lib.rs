@@ -20,7 +20,7 @@
 //! let out = planner.step_raw(pose, &[0; 5]); // nothing in sight
 //! assert_eq!(out.status, Status::Moving);
 //! assert_eq!(out.command.heading, Angle::ZERO);
-//! assert_eq!(out.command.step_mm, 780); // sensor reach minus the robot's disc
+//! assert_eq!(out.command.step_mm, 760); // sensor reach minus the widened disc
 //! ```
 //!
 //! Modules, one per concept of the papers: [`apf`] (the classical
@@ -371,7 +371,8 @@ mod tests {
         let mut p = planner(Point::new(0, 3_000));
         let out = p.step_raw(at(0, 0, 90), &[0; 5]);
         assert_eq!(out.command.heading, Angle::QUARTER);
-        assert_eq!(out.command.step_mm, 780);
+        // Reach 900 mm less radius and clearance (140 mm).
+        assert_eq!(out.command.step_mm, 760);
         assert_eq!(out.status, Status::Moving);
     }
 

@@ -46,7 +46,7 @@ pub const OFFSET: f64 = 100.0;
 /// Sensor range, mm.
 pub const RANGE: f64 = 800.0;
 /// Clearance added to the radius, mm.
-pub const CLEARANCE: f64 = 20.0;
+pub const CLEARANCE: f64 = 40.0;
 /// Stand-off kept in front of the sensor faces, mm.
 pub const STANDOFF: f64 = 100.0;
 /// Goal tolerance, mm.
@@ -393,7 +393,9 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         let mut step = if rel.abs() > half {
             F::zero()
         } else {
-            self.paper_step.min(free::<F, M>(&rd, rel))
+            let (free, margin) = free_margin::<F, M>(&rd, rel);
+            self.near(margin, F::zero());
+            self.paper_step.min(free)
         };
         if near {
             step = step.min(gd);
@@ -407,7 +409,9 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         let spin = step == F::zero() && pts.is_empty() && rel.abs() > half;
         if spin && self.spun {
             heading = h;
-            step = (self.paper_step.min(free::<F, M>(&rd, F::zero())) / c(2.0)).floor();
+            let (free, margin) = free_margin::<F, M>(&rd, F::zero());
+            self.near(margin, F::zero());
+            step = (self.paper_step.min(free) / c(2.0)).floor();
             self.near(step, c(MIN_STEP));
             if step < c(MIN_STEP) {
                 step = F::zero();
@@ -420,9 +424,16 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
 
 /// The safety rule in float: how far the disc may go along `rel`.
 pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> F {
+    free_margin::<F, M>(rd, rel).0
+}
+
+/// [`free`], and how near (mm) a beam's end came to the edge of the
+/// corridor (a decision boundary: just inside it blocks, just outside not).
+pub fn free_margin<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> (F, F) {
     let (offset, rs) = (c::<F>(OFFSET), c::<F>(RADIUS + CLEARANCE));
     let reach = offset + c(RANGE);
     let mut free = reach - rs;
+    let mut margin = F::infinity();
     for i in 0..5 {
         let (e, obstacle) = match rd[i] {
             R::Range(mm) => (offset + mm, true),
@@ -431,6 +442,9 @@ pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> F {
         };
         let a = c::<F>(ANGLES[i]).to_radians() - rel;
         let (along, lat) = (e * M::cos(a), e * M::sin(a));
+        if obstacle {
+            margin = margin.min((lat.abs() - rs).abs());
+        }
         if lat.abs() < rs {
             let mut limit = along - M::sqrt(rs * rs - lat * lat);
             if obstacle {
@@ -439,5 +453,5 @@ pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> F {
             free = free.min(limit.max(F::zero()));
         }
     }
-    free
+    (free, margin)
 }
