@@ -6,7 +6,7 @@
 //! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
 //! the step costs tens of thousands of cycles (32-bit arithmetic compiles
 //! to long AVR sequences: one `atan2` is ~1,800 cycles, the free-distance
-//! rule ~7,500), and the firmware is ~25 KB of flash.
+//! rule ~7,500), and the firmware is ~28 KB of flash.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
@@ -72,7 +72,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~28.5 KB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~27.8 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
