@@ -214,7 +214,7 @@ impl Planner {
                 .push(robot.offset_dir(toward, p.distance_mm));
             repulsive = repulsive.plus(forces::repulsion(toward, p.distance_mm));
         }
-        self.memory.remember_all(
+        self.memory.remember_group(
             &self.last_points,
             robot,
             pose.heading,

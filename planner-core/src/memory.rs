@@ -166,6 +166,25 @@ impl Memory {
         target: Point,
         diagonal_tolerance: Angle,
     ) -> usize {
+        // A cycle has at most one point per sensor; longer lists go in
+        // groups of that size, each merging into what the last stored.
+        points
+            .chunks(SENSOR_COUNT)
+            .map(|group| self.remember_group(group, robot, heading, target, diagonal_tolerance))
+            .sum()
+    }
+
+    /// [`Memory::remember_all`] for one cycle's collision points, at most
+    /// one per sensor (the planner's case; points beyond [`SENSOR_COUNT`]
+    /// are not looked at).
+    pub(crate) fn remember_group(
+        &mut self,
+        points: &[Point],
+        robot: Point,
+        heading: Angle,
+        target: Point,
+        diagonal_tolerance: Angle,
+    ) -> usize {
         let class = direction_class(heading, diagonal_tolerance);
         let span = Span::new(robot, target);
         // Only the points the span's rule keeps can be stored or merged.
@@ -383,7 +402,7 @@ mod tests {
         #[test]
         fn one_pass_equals_the_rules_point_by_point(
             cycles in proptest::collection::vec(
-                (proptest::collection::vec((0i16..600, -300i16..300), 0..6), -180i16..180),
+                (proptest::collection::vec((0i16..600, -300i16..300), 0..12), -180i16..180),
                 0..12,
             ),
         ) {
