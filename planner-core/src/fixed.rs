@@ -113,12 +113,6 @@ impl Angle {
         self.add(Angle::QUARTER).sin()
     }
 
-    /// `(cos, sin)` scaled so the vector has length `magnitude` (any scale;
-    /// clamped to ±131,071 so the Q14 products fit in 32 bits).
-    pub fn scaled(self, magnitude: i32) -> (i32, i32) {
-        Dir::of(self).scaled(magnitude)
-    }
-
     /// `atan2(y, x)` as an angle; `atan2(0, 0)` is 0.
     ///
     /// Octant reduction, one 32-bit division for the ratio `t = min/max`,
@@ -213,7 +207,7 @@ impl core::ops::Neg for Dir {
     }
 }
 
-/// Largest magnitude [`Angle::scaled`] accepts (`2^17 − 1`).
+/// Largest magnitude [`Dir::scaled`] accepts (`2^17 − 1`).
 pub const MAX_SCALED: i32 = (1 << 17) - 1;
 
 /// `a · b` where one of them is Q14, rounded; `|a · b| < 2^31`.

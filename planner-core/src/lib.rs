@@ -147,13 +147,24 @@ impl Planner {
 
     /// Raw counts to readings with `config`'s calibrations.
     pub fn readings_with(config: &Config, raw: &RawCounts) -> Readings {
+        Planner::readings_then(config, raw, |_, r| r)
+    }
+
+    /// Raw counts to readings, each passed through `then(sensor, reading)`
+    /// in the same pass (the step's fold-back filter).
+    fn readings_then(
+        config: &Config,
+        raw: &RawCounts,
+        mut then: impl FnMut(usize, Reading) -> Reading,
+    ) -> Readings {
         let mut out = [Reading::Clear; SENSOR_COUNT];
-        for ((o, &c), cal) in out
+        for (i, ((o, &c), cal)) in out
             .iter_mut()
             .zip(raw.iter())
             .zip(config.calibration.iter())
+            .enumerate()
         {
-            *o = cal.reading(c);
+            *o = then(i, cal.reading(c));
         }
         out
     }
@@ -168,15 +179,8 @@ impl Planner {
     /// end shares).
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
         // Counts to readings and the fold-back filter, one pass.
-        let mut readings = [Reading::Clear; SENSOR_COUNT];
-        for (i, ((r, &count), cal)) in readings
-            .iter_mut()
-            .zip(raw.iter())
-            .zip(self.config.calibration.iter())
-            .enumerate()
-        {
-            *r = self.fold_back.filter(i, cal.reading(count));
-        }
+        let fold_back = &mut self.fold_back;
+        let readings = Planner::readings_then(&self.config, raw, |i, r| fold_back.filter(i, r));
         self.last_readings = readings;
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);
@@ -359,6 +363,14 @@ mod tests {
         )
     }
 
+    /// The front sensor's first count that reads `mm` or nearer.
+    fn count_for(p: &Planner, mm: u16) -> u16 {
+        let cal = p.config().calibration(2).unwrap();
+        (86..=532)
+            .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= mm)
+            .unwrap()
+    }
+
     fn at(x: i16, y: i16, deg: i16) -> Pose {
         Pose {
             position: Point::new(x, y),
@@ -399,9 +411,7 @@ mod tests {
         let mut p = planner(Point::new(3_000, 0));
         let cal = p.config().calibration(2).unwrap().clone();
         // An obstacle 300 mm ahead on the front sensor (count for ~300 mm).
-        let c300 = (86..=532)
-            .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= 300)
-            .unwrap();
+        let c300 = count_for(&p, 300);
         let out = p.step_raw(at(0, 0, 0), &[0, 0, c300, 0, 0]);
         // Attraction 2 forward, repulsion 1/0.4² = 6.25 back: the heading
         // reverses, so the rover turns to the sector's edge (±40°) instead,
@@ -419,12 +429,9 @@ mod tests {
     #[test]
     fn a_force_from_behind_turns_the_rover_round_one_way() {
         let mut p = planner(Point::new(3_000, 0));
-        let cal = p.config().calibration(2).unwrap().clone();
         // A wall 150 mm ahead of the front sensor: its repulsion (≈ 16
         // units) dwarfs the attraction (2) and points straight back.
-        let near = (86..=532)
-            .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= 150)
-            .unwrap();
+        let near = count_for(&p, 150);
         let counts = [0, 0, near, 0, 0];
         let first = p.step_raw(at(0, 0, 0), &counts).command.heading;
         assert_eq!(first.abs_signed(), Angle::from_deg(40).0);

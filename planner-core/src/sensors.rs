@@ -273,13 +273,6 @@ impl FoldBackFilter {
     /// A previous reading at or below this (mm) makes a far jump suspect.
     pub const NEAR_MM: u16 = 150;
 
-    /// Filter this cycle's readings in place.
-    pub fn apply(&mut self, readings: &mut Readings) {
-        for (i, r) in readings.iter_mut().enumerate() {
-            *r = self.filter(i, *r);
-        }
-    }
-
     /// Filter this cycle's reading of sensor `i`.
     pub fn filter(&mut self, i: usize, r: Reading) -> Reading {
         let Some(last) = self.last_mm.get_mut(i) else {
@@ -504,14 +497,19 @@ mod tests {
     #[test]
     fn fold_back_jump_is_distrusted_for_one_cycle() {
         let mut f = FoldBackFilter::default();
+        let apply = |f: &mut FoldBackFilter, r: &mut Readings| {
+            for (i, x) in r.iter_mut().enumerate() {
+                *x = f.filter(i, *x);
+            }
+        };
         let mut r = [Reading::Range(120); SENSOR_COUNT];
-        f.apply(&mut r);
+        apply(&mut f, &mut r);
         assert_eq!(r[0], Reading::Range(120));
         let mut r = [Reading::Clear; SENSOR_COUNT];
-        f.apply(&mut r);
+        apply(&mut f, &mut r);
         assert_eq!(r[0], Reading::TooClose);
         let mut r = [Reading::Clear; SENSOR_COUNT];
-        f.apply(&mut r);
+        apply(&mut f, &mut r);
         assert_eq!(r[0], Reading::Clear);
     }
 
