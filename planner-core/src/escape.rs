@@ -165,6 +165,10 @@ pub struct Escape {
     dropped: u16,
     recent: Deque<Point, WINDOW_CAPACITY>,
     crumbs: Deque<Point, CRUMB_CAPACITY>,
+    /// Where, and for which radius, the trail was last searched and no old
+    /// breadcrumb was near, the trail unchanged since: a rover turning in
+    /// place asks the same question every cycle.
+    no_revisit_at: Option<(Point, u16)>,
     obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
 }
 
@@ -184,6 +188,7 @@ impl Escape {
             dropped: 0,
             recent: Deque::new(),
             crumbs: Deque::new(),
+            no_revisit_at: None,
             obstacles: Ring::new(),
         }
     }
@@ -220,7 +225,9 @@ impl Escape {
                 .front()
                 .is_some_and(|&p| within(p, robot, cfg.stuck_mm));
         // Loop: back near an old breadcrumb.
-        let looped = self.revisits(robot, cfg.revisit_mm);
+        let question = (robot, cfg.revisit_mm);
+        let looped = self.no_revisit_at != Some(question) && self.revisits(robot, cfg.revisit_mm);
+        self.no_revisit_at = (!looped).then_some(question);
         if self
             .crumbs
             .back()
@@ -230,6 +237,7 @@ impl Escape {
                 self.crumbs.pop_front();
             }
             let _ = self.crumbs.push_back(robot);
+            self.no_revisit_at = None;
         }
         if !(stuck || looped) {
             return Verdict::Continue;
@@ -390,6 +398,29 @@ mod tests {
             let n = e.crumbs.len();
             let plain = e.crumbs.iter().take(n.saturating_sub(2)).any(|&c| within(c, robot, r));
             proptest::prop_assert_eq!(e.revisits(robot, r), plain);
+        }
+    }
+
+    proptest::proptest! {
+        /// Skipping the trail search where it last found nothing changes
+        /// no verdict: the same walk with the search forced every cycle.
+        #[test]
+        fn the_kept_search_result_changes_nothing(
+            walk in proptest::collection::vec((0i16..4, 0i16..4, 0u16..3), 1..120),
+        ) {
+            let cfg = EscapeConfig { crumb_mm: 250, revisit_mm: 200, ..EscapeConfig::default() };
+            let (mut kept, mut plain) = (Escape::new(), Escape::new());
+            for &(i, j, stay) in &walk {
+                // A coarse grid, visited in runs: loops, stays and moves.
+                let robot = Point::new(300 * i, 300 * j);
+                for _ in 0..=stay {
+                    plain.no_revisit_at = None;
+                    let goal_mm = 3_000 - 100 * (i + j) as u16;
+                    let want = plain.observe(&cfg, robot, goal_mm);
+                    proptest::prop_assert_eq!(kept.observe(&cfg, robot, goal_mm), want);
+                    proptest::prop_assert!(kept.obstacles().eq(plain.obstacles()));
+                }
+            }
         }
     }
 
