@@ -233,15 +233,17 @@ pub fn mul16(a: i16, b: i16) -> i32 {
 /// `a.distance_mm(b) < r_mm`, by a bounding-box test and squared lengths
 /// (no square root).
 pub fn within(a: Point, b: Point, r_mm: u16) -> bool {
-    let (dx, dy) = a.to(b);
-    let r = r_mm as i32;
-    if dx.abs() >= r || dy.abs() >= r {
+    // Most pairs fail the box test, one unsigned compare per axis (the
+    // escape runs it over its whole trail every cycle).
+    if !box_within(a, b, r_mm) {
         return false;
     }
     // |dx|, |dy| < r ≤ 65,535: squares as u32 (16 × 16 bits); their sum
     // saturates, and a saturated sum exceeds any r².
+    let (dx, dy) = a.to(b);
     let (ux, uy) = (dx.unsigned_abs(), dy.unsigned_abs());
-    (ux * ux).saturating_add(uy * uy) < (r as u32) * (r as u32)
+    let r = r_mm as u32;
+    (ux * ux).saturating_add(uy * uy) < r * r
 }
 
 /// Whether `a` and `b` are less than `r_mm` apart on each axis (Chebyshev

@@ -13,8 +13,11 @@
 //! Capacity and eviction: at most [`MEMORY_CAPACITY`] points. A new point
 //! within [`MERGE_MM`] of a remembered one of the same class is not stored
 //! again (a wall seen on consecutive cycles would otherwise fill the memory
-//! with near-copies). When the memory is full the *oldest* point is evicted:
-//! the most recent obstacles are the ones the robot is dealing with.
+//! with near-copies); "remembered" means held when the cycle began or
+//! stored earlier in the same cycle, so a point evicted during the cycle
+//! still takes merges until it ends (no search for it among the merge
+//! candidates). When the memory is full the *oldest* point is evicted: the
+//! most recent obstacles are the ones the robot is dealing with.
 
 use crate::fixed::{box_within, Angle, Point};
 use crate::ring::Ring;
@@ -221,8 +224,8 @@ impl Memory {
     }
 
     /// [`Memory::remember`] for the collision points of one cycle, in
-    /// order (a point merges into one stored earlier in the same cycle),
-    /// classifying once. Returns how many were stored.
+    /// order (a point merges into one held when the cycle began or stored
+    /// earlier in it), classifying once. Returns how many were stored.
     pub fn remember_all(
         &mut self,
         points: &[Point],
@@ -276,7 +279,7 @@ impl Memory {
         let reach = Span::around(lo, hi, MERGE_MM);
         // The candidates' positions, copied: the per-point scans below then
         // run over a short contiguous slice.
-        let mut candidates: Vec<Point, MEMORY_CAPACITY> = Vec::new();
+        let mut candidates: Vec<Point, { MEMORY_CAPACITY + SENSOR_COUNT }> = Vec::new();
         for q in self.points.as_slice() {
             let (in_x, in_y) = reach.axes(q.point);
             if q.class == class && in_x && in_y {
@@ -293,23 +296,12 @@ impl Memory {
             }
             // A kept point is active: the span's rule let it in.
             sums.add(point);
-            // Later points of this cycle may merge into this one; the point
-            // it evicted (if any) can no longer take merges. At most one
-            // entry per stored point: never more than the capacity.
+            // Later points of this cycle may merge into this one. (Into the
+            // point it evicted, if any, too: the cycle's points are compared
+            // with the memory as the cycle found it and with each other.)
             if let Some(gone) = self.points.push(Remembered { point, class }) {
                 if span.holds(&gone) {
                     sums.remove(gone.point);
-                }
-                if gone.class == class {
-                    // `swap_remove` by hand: heapless's asserts the index,
-                    // which would link a panic into the firmware.
-                    if let Some(i) = candidates.iter().position(|&q| q == gone.point) {
-                        if let Some(last) = candidates.pop() {
-                            if let Some(slot) = candidates.get_mut(i) {
-                                *slot = last;
-                            }
-                        }
-                    }
                 }
             }
             let _ = candidates.push(point);
@@ -443,29 +435,37 @@ mod tests {
         assert!(m.is_empty() && m.iter().next().is_none());
     }
 
-    /// The memory as the paper's rules state it, one point at a time, for
-    /// the tests: store unless held by the span's rule or near a point of
-    /// the same class; when full, overwrite the oldest.
+    /// The memory as the rules state it, one cycle's points (a group) at
+    /// a time, for the tests: a point is stored unless held by the span's
+    /// rule or near a point of the same class that the memory held when
+    /// the cycle began or that the cycle stored before it; when full, it
+    /// overwrites the oldest. Returns how many were stored.
     fn naive(
         mem: &mut std::vec::Vec<Remembered>,
         oldest: &mut usize,
-        r: Remembered,
+        group: &[Remembered],
         span: Span,
-    ) -> bool {
-        if !span.holds(&r)
-            || mem
-                .iter()
-                .any(|q| near(q.point, r.point) && q.class == r.class)
-        {
-            return false;
+    ) -> usize {
+        let mut seen = mem.clone();
+        let mut stored = 0;
+        for &r in group {
+            if !span.holds(&r)
+                || seen
+                    .iter()
+                    .any(|q| near(q.point, r.point) && q.class == r.class)
+            {
+                continue;
+            }
+            seen.push(r);
+            stored += 1;
+            if mem.len() < MEMORY_CAPACITY {
+                mem.push(r);
+            } else {
+                mem[*oldest] = r;
+                *oldest = (*oldest + 1) % MEMORY_CAPACITY;
+            }
         }
-        if mem.len() < MEMORY_CAPACITY {
-            mem.push(r);
-        } else {
-            mem[*oldest] = r;
-            *oldest = (*oldest + 1) % MEMORY_CAPACITY;
-        }
-        true
+        stored
     }
 
     proptest::proptest! {
@@ -487,10 +487,12 @@ mod tests {
                 let class = direction_class(heading, TOL);
                 let pts: std::vec::Vec<Point> =
                     cycle.iter().map(|&(x, y)| Point::new(x, y)).collect();
-                let m = pts
-                    .iter()
-                    .filter(|&&point| naive(&mut model, &mut oldest, Remembered { point, class }, span))
-                    .count();
+                let group: std::vec::Vec<Remembered> =
+                    pts.iter().map(|&point| Remembered { point, class }).collect();
+                let m: usize = group
+                    .chunks(SENSOR_COUNT)
+                    .map(|g| naive(&mut model, &mut oldest, g, span))
+                    .sum();
                 let n = a.remember_all(&pts, robot, heading, target, TOL);
                 proptest::prop_assert_eq!(n, m);
                 proptest::prop_assert!(a.points.as_slice().iter().eq(model.iter()));
