@@ -61,7 +61,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~40,000 cycles on average, ~73,000 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~40,000 cycles on average, ~75,000 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
