@@ -97,6 +97,16 @@ fn main() -> ExitCode {
     }
 }
 
+/// Print to stdout. A reader that has gone (`sim-host … | head`) is not
+/// an error: `println!` would panic there.
+fn say(text: &str) -> Result<(), String> {
+    use std::io::Write;
+    match std::io::stdout().lock().write_all(text.as_bytes()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => Err(format!("stdout: {e}")),
+        _ => Ok(()),
+    }
+}
+
 fn sensors(perfect: bool) -> SensorMode {
     if perfect {
         SensorMode::Perfect
@@ -124,21 +134,27 @@ fn real_main(cli: Cli) -> Result<(), String> {
             };
             let refp = reference::shortest_path(&sc);
             let res = sim::run(&sc, &cfg, refp.as_ref().map(|r| r.length));
-            println!("scenario     {}", sc.name);
-            println!("planner      {}", planner.name());
-            println!("outcome      {}", res.outcome.as_str());
-            println!("steps        {}", res.steps);
-            println!("path_length  {:.3} m", res.path_length);
-            match &refp {
-                Some(r) => println!(
-                    "reference    {:.3} m (ratio {:.3})",
+            let mut report = format!(
+                "scenario     {}\nplanner      {}\noutcome      {}\nsteps        {}\n\
+                 path_length  {:.3} m\n",
+                sc.name,
+                planner.name(),
+                res.outcome.as_str(),
+                res.steps,
+                res.path_length
+            );
+            report += &match &refp {
+                Some(r) => format!(
+                    "reference    {:.3} m (ratio {:.3})\n",
                     r.length,
                     res.path_length / r.length
                 ),
-                None => println!("reference    none (no path on the reference grid)"),
-            }
-            println!("min_clear    {:.3} m", res.min_clearance);
-            println!("virtual_obs  {}", res.virtual_dropped);
+                None => "reference    none (no path on the reference grid)\n".into(),
+            };
+            report += &format!(
+                "min_clear    {:.3} m\nvirtual_obs  {}\n",
+                res.min_clearance, res.virtual_dropped
+            );
             if let Some(out) = svg_out {
                 let pic = svg::render(
                     &sc,
@@ -147,13 +163,13 @@ fn real_main(cli: Cli) -> Result<(), String> {
                     refp.as_ref().map(|r| r.path.as_slice()),
                 );
                 write(&out, &pic)?;
-                println!("svg          {}", out.display());
+                report += &format!("svg          {}\n", out.display());
             }
             if let Some(out) = trace {
                 write(&out, &sim::trace_csv(&res.trace))?;
-                println!("trace        {}", out.display());
+                report += &format!("trace        {}\n", out.display());
             }
-            Ok(())
+            say(&report)
         }
         Cmd::Bench {
             paths,
@@ -185,14 +201,14 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 };
                 let mut these = bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?;
                 if seeds > 1 {
-                    print!("seed {seed}: {}", bench::table(&these, true));
+                    say(&format!("seed {seed}: {}", bench::table(&these, true)))?;
                 }
                 rows.append(&mut these);
             }
             if seeds > 1 {
-                print!("all seeds: {}", bench::table(&rows, true));
+                say(&format!("all seeds: {}", bench::table(&rows, true)))?;
             } else {
-                print!("{}", bench::table(&rows, summary));
+                say(&bench::table(&rows, summary))?;
             }
             if let Some(out) = json {
                 let lines: Vec<String> = rows
@@ -224,8 +240,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 &w.to_toml("random circle world with the EAPF paper's environment 2 parameters"),
             )?;
             Scenario::load(&out).map_err(|e| e.to_string())?;
-            println!("wrote {}", out.display());
-            Ok(())
+            say(&format!("wrote {}\n", out.display()))
         }
     }
 }

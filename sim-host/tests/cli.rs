@@ -52,3 +52,21 @@ fn zero_seeds_is_a_usage_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--seeds"));
 }
+
+#[test]
+fn a_reader_that_leaves_early_is_no_panic() {
+    // `sim-host run … | head -1`: stdout closes before the report is
+    // written; `println!` would panic on the broken pipe.
+    let mut child = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .arg("run")
+        .arg(corridor())
+        .stdout(std::process::Stdio::piped())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    drop(child.stdout.take());
+    let out = child.wait_with_output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(out.status.success(), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+}
