@@ -170,8 +170,8 @@ impl ActiveSums {
 /// The bounded memory of collision points: a [`Ring`], so that the scans
 /// that run every cycle (merging, the midpoint) are single tight loops.
 ///
-/// It also keeps the midpoint's sums for the last robot position and
-/// target it stored points at, updated as points come and go. While the
+/// It also keeps the midpoint's sums for the robot position and target of
+/// the last cycle's points, updated as points come and go. While the
 /// rover turns in place, facing a wall and storing what its beams sweep
 /// over (the planner's most expensive cycles), the midpoint then costs no
 /// scan of the memory.
