@@ -240,7 +240,7 @@ impl Planner {
             .plus(repulsive)
             .plus(self.escape.force(&cfg.escape, robot, bearing));
         if !near {
-            let (_, ax, ay) = self.memory.away_from_midpoint(robot, self.goal);
+            let (_, ax, ay) = self.memory.away_from_midpoint_kept(robot, self.goal);
             f = f.plus(forces::midpoint(cfg, ax, ay));
             if self.following {
                 f = f.plus(forces::off_sensor(cfg, heading_dir, motion, &readings));
