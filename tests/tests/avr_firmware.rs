@@ -61,7 +61,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~40,000 cycles on average, ~75,000 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~33,000 cycles on average, ~63,000 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
@@ -72,7 +72,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~27.8 KiB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~27.9 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
@@ -93,6 +93,27 @@ fn firmware_has_no_panicking_paths() {
     assert!(
         panicking.is_empty(),
         "panicking paths linked: {panicking:#?}"
+    );
+}
+
+/// The image divides with avr-gcc's libgcc routines, not compiler-builtins'
+/// slower generic ones (`firmware-avr/build.rs`): `__divmodsi4` is a strong
+/// symbol and the generic `u32_div_rem` is not linked.
+#[test]
+fn firmware_divides_with_libgcc() {
+    let out = std::process::Command::new("avr-nm")
+        .arg(firmware_elf())
+        .output()
+        .expect("avr-nm (Debian binutils-avr, with gcc-avr)");
+    let symbols = String::from_utf8_lossy(&out.stdout);
+    let strong = |name: &str| symbols.lines().any(|l| l.ends_with(&format!(" T {name}")));
+    assert!(
+        strong("__divmodsi4") && strong("__udivmodsi4"),
+        "libgcc's division not linked"
+    );
+    assert!(
+        !symbols.contains("u32_div_rem"),
+        "compiler-builtins' generic division is still linked"
     );
 }
 
