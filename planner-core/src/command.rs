@@ -107,7 +107,7 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
     // The usual headings are a sensor's (straight ahead, a sector edge):
     // their sine and cosine are in the config already.
     let dir = match cfg.sensor_angles.iter().position(|&a| a == relative) {
-        Some(i) => cfg.sensor_dirs[i % SENSOR_COUNT],
+        Some(i) => cfg.sensor_dirs[i.min(SENSOR_COUNT - 1)],
         None => Dir::of(relative),
     };
     let (c, s) = (dir.c, dir.s);

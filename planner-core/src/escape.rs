@@ -282,8 +282,8 @@ impl Escape {
     /// its true distance), computed as components: no angle, so no `atan2`
     /// and no sine per obstacle.
     pub fn force(&self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
-        // In slot order: the sum cannot saturate (at most 24 terms below
-        // 2^25 each), so the order does not change it.
+        // At most 24 terms below 2^25 each: the sum stays below 2^30, so a
+        // plain add, and the slot order does not change it.
         let mut f = Force::ZERO;
         for v in self.obstacles.as_slice() {
             let (dx, dy) = v.centre.to(robot);
@@ -296,20 +296,22 @@ impl Escape {
             // (1/d²)·K_v in Q10 without 64-bit maths: ≤ 7,750 · 16,384 fits in i32.
             let mag =
                 (((inverse_square_force(d) >> 4) * cfg.k_v) >> (FORCE_SHIFT - 4)).min(MAX_SCALED);
-            let r = r as i32;
-            let one = match ((mag << 12) + r / 2).checked_div(r) {
+            // Unsigned (mag ≥ 0, r ≥ 0): the AVR's signed division is the
+            // unsigned one wrapped in sign handling.
+            let r = r as u32;
+            let one = match (((mag as u32) << 12) + r / 2).checked_div(r) {
                 // mag/r in Q12, rounded (mag < 2^17), then times |dx|, |dy|
                 // ≤ r: the products stay below mag · 2^12 + r < 2^30.
                 Some(per_mm) => Force {
-                    x: (dx * per_mm + (1 << 11)) >> 12,
-                    y: (dy * per_mm + (1 << 11)) >> 12,
+                    x: (dx * per_mm as i32 + (1 << 11)) >> 12,
+                    y: (dy * per_mm as i32 + (1 << 11)) >> 12,
                 },
                 // Standing on the centre: straight away from the goal.
                 _ => Force::along(bearing.add(Angle::HALF), mag),
             };
             // |one| ≤ 2^17 and weight ≤ 255: the products fit in i32.
             let w = v.weight as i32;
-            f = f.plus(Force {
+            f = f.plus_bounded(Force {
                 x: one.x * w,
                 y: one.y * w,
             });

@@ -36,10 +36,16 @@ pub fn collision_points(
     step_mm: u16,
 ) -> heapless::Vec<CollisionPoint, SENSOR_COUNT> {
     let mut out = heapless::Vec::new();
-    for (i, (&r, dir)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
+    // Zipped, not indexed: an index `% SENSOR_COUNT` to keep the panic path
+    // out costs a 16-bit division per sensor on the AVR.
+    let per_sensor = readings
+        .iter()
+        .zip(cfg.sensor_dirs.iter())
+        .zip(cfg.corridor_mm.iter());
+    for (i, ((&r, dir), &corridor)) in per_sensor.enumerate() {
         if let Some(d) = obstacle_distance_mm(cfg, r) {
             // `d·|sin θs| ≤ radius + clearance` as `d ≤` its precomputed limit.
-            let inside = d <= cfg.corridor_mm[i % SENSOR_COUNT];
+            let inside = d <= corridor;
             if inside && mul_q14(d as i32, dir.c) <= step_mm as i32 {
                 let _ = out.push(CollisionPoint {
                     sensor: i as u8,
@@ -65,8 +71,10 @@ pub fn repulsion(toward: Dir, distance_mm: u16) -> Force {
 }
 
 /// World direction of sensor `i`'s beam for a robot heading `heading`.
+/// An index past the last sensor reads as the last (clamped, not `% 5`: a
+/// division per call on the AVR, and no panic path either way).
 pub fn sensor_direction(cfg: &Config, heading: Dir, i: usize) -> Dir {
-    cfg.sensor_dirs[i % SENSOR_COUNT].rotated(heading)
+    cfg.sensor_dirs[i.min(SENSOR_COUNT - 1)].rotated(heading)
 }
 
 /// Midpoint repulsive force (eqs. 12, 13): constant magnitude ξ_MP away from

@@ -216,7 +216,8 @@ impl Planner {
             let _ = self
                 .last_points
                 .push(robot.offset_dir(toward, p.distance_mm));
-            repulsive = repulsive.plus(forces::repulsion(toward, p.distance_mm));
+            // At most five terms below 2^17 each (`Dir::scaled` clamps).
+            repulsive = repulsive.plus_bounded(forces::repulsion(toward, p.distance_mm));
         }
         self.memory.remember_group(
             &self.last_points,

@@ -61,7 +61,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~33,000 cycles on average, ~63,000 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~29,000 cycles on average, ~55,000 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
@@ -72,7 +72,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~27.9 KiB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~26.6 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
@@ -98,9 +98,10 @@ fn firmware_has_no_panicking_paths() {
 
 /// The image divides with avr-gcc's libgcc routines, not compiler-builtins'
 /// slower generic ones (`firmware-avr/build.rs`): `__divmodsi4` is a strong
-/// symbol and the generic `u32_div_rem` is not linked.
+/// symbol and the generic `u32_div_rem` is not linked; avr-libc's memory
+/// copies likewise.
 #[test]
-fn firmware_divides_with_libgcc() {
+fn firmware_links_libgcc_division_and_libc_copies() {
     let out = std::process::Command::new("avr-nm")
         .arg(firmware_elf())
         .output()
@@ -115,6 +116,10 @@ fn firmware_divides_with_libgcc() {
         !symbols.contains("u32_div_rem"),
         "compiler-builtins' generic division is still linked"
     );
+    // compiler-builtins' copies are weak (` W memcpy`); avr-libc's are not.
+    for name in ["memcpy", "memmove", "memset"] {
+        assert!(strong(name), "avr-libc's {name} not linked");
+    }
 }
 
 /// The f32 bench really computes the step: its commands agree with the
