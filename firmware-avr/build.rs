@@ -51,7 +51,7 @@ fn main() {
             .expect("avr-ar (binutils-avr) not found");
         assert!(
             status.success(),
-            "avr-ar could not extract {members:?} from {} (is avr-libc installed?)",
+            "avr-ar could not extract {members:?} from {}: apt-get update && apt-get install -y --no-install-recommends gcc-avr avr-libc",
             archive.trim()
         );
         for member in members {
