@@ -357,6 +357,36 @@ mod tests {
     use super::*;
 
     #[test]
+    fn the_strongest_full_set_of_virtual_obstacles_sums_without_overflow() {
+        // The force sum is a plain add on the bound that every term is
+        // below 2^25 (a magnitude clamped below 2^17, times a weight up
+        // to 255) and there are at most VIRTUAL_CAPACITY of them. The
+        // extreme: the largest K_v, every slot of weight 255 on one spot
+        // right behind the rover, all pushing the same way.
+        let cfg = EscapeConfig {
+            k_v: 16 * FORCE_ONE,
+            ..EscapeConfig::default()
+        };
+        let robot = Point::new(0, 0);
+        let strongest = VirtualObstacle::new(&cfg, Point::new(-100, 0), u8::MAX);
+        let mut one = Escape::new();
+        one.obstacles.push(strongest);
+        let mut full = Escape::new();
+        for _ in 0..VIRTUAL_CAPACITY {
+            full.obstacles.push(strongest);
+        }
+        let f1 = one.force(&cfg, robot, Angle::ZERO);
+        let f = full.force(&cfg, robot, Angle::ZERO);
+        assert_eq!(
+            f1.x,
+            MAX_SCALED * u8::MAX as i32,
+            "clamped magnitude along +x"
+        );
+        assert_eq!(f.x as i64, VIRTUAL_CAPACITY as i64 * f1.x as i64);
+        assert_eq!(f.y, 0);
+    }
+
+    #[test]
     fn stuck_rover_drops_then_gives_up() {
         let cfg = EscapeConfig {
             window_steps: 3,
