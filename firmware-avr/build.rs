@@ -30,6 +30,10 @@ const ARCHIVES: [(&str, &[&str]); 2] = [
     ),
 ];
 
+/// What to run when avr-gcc or one of its libraries is missing.
+const INSTALL: &str =
+    "apt-get update && apt-get install -y --no-install-recommends gcc-avr avr-libc";
+
 fn main() {
     println!("cargo:rerun-if-changed=build.rs");
     if env::var("CARGO_CFG_TARGET_ARCH").as_deref() != Ok("avr") {
@@ -40,7 +44,7 @@ fn main() {
         let archive = Command::new("avr-gcc")
             .args(["-mmcu=atmega328p", ask])
             .output()
-            .expect("avr-gcc not found: apt-get update && apt-get install -y --no-install-recommends gcc-avr avr-libc");
+            .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
         let archive = String::from_utf8(archive.stdout).expect("avr-gcc printed a path");
         let status = Command::new("avr-ar")
             .arg("x")
@@ -48,10 +52,10 @@ fn main() {
             .args(members)
             .current_dir(&out)
             .status()
-            .expect("avr-ar (binutils-avr) not found");
+            .unwrap_or_else(|e| panic!("avr-ar (binutils-avr) not found ({e}): {INSTALL}"));
         assert!(
             status.success(),
-            "avr-ar could not extract {members:?} from {}: apt-get update && apt-get install -y --no-install-recommends gcc-avr avr-libc",
+            "avr-ar could not extract {members:?} from {}: {INSTALL}",
             archive.trim()
         );
         for member in members {

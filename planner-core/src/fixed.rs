@@ -215,10 +215,9 @@ pub fn mul_q14(a: i32, b: i32) -> i32 {
     (a * b + (1 << 13)) >> 14
 }
 
-/// `a · b` as 32 bits from 16-bit operands. (Not cheaper on the AVR:
-/// LLVM's backend widens it to libgcc's 32-bit `__mulsi3`, ~69 cycles,
-/// measured; a 16-bit-only special case in [`mul_q14`] cost more in checks
-/// than it saved and was removed.)
+/// `a · b` as 32 bits from 16-bit operands: the types state the operands'
+/// range. (On the AVR it costs a full 32-bit multiply all the same: LLVM
+/// widens it to libgcc's `__mulsi3`.)
 #[inline]
 pub fn mul16(a: i16, b: i16) -> i32 {
     a as i32 * b as i32
