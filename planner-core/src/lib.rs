@@ -211,21 +211,28 @@ impl Planner {
         // position and its repulsion (eqs. 9, 10).
         let heading_dir = Dir::of(pose.heading);
         let mut repulsive = Force::ZERO;
+        let mut nearest: Option<(u16, Point)> = None;
         for p in points.iter() {
             let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
-            let _ = self
-                .last_points
-                .push(robot.offset_dir(toward, p.distance_mm));
+            let at = robot.offset_dir(toward, p.distance_mm);
+            let _ = self.last_points.push(at);
+            if nearest.is_none_or(|(d, _)| p.distance_mm < d) {
+                nearest = Some((p.distance_mm, at));
+            }
             // At most five terms below 2^17 each (`Dir::scaled` clamps).
             repulsive = repulsive.plus_bounded(forces::repulsion(toward, p.distance_mm));
         }
-        self.memory.remember_group(
-            &self.last_points,
-            robot,
-            pose.heading,
-            self.goal,
-            cfg.diagonal_tolerance,
-        );
+        // Ours: the memory takes the nearest point of the cycle only, which
+        // bounds a cycle's work (see `memory`).
+        if let Some((_, point)) = nearest {
+            self.memory.remember(
+                point,
+                robot,
+                pose.heading,
+                self.goal,
+                cfg.diagonal_tolerance,
+            );
+        }
 
         // Off-sensor following state (§5.5): from the first collision until DM.
         let motion = forces::motion(cfg, pose.heading, bearing);
@@ -425,6 +432,25 @@ mod tests {
         assert_eq!(out.command.step_mm, seen_mm + 200);
         assert_eq!(p.last_collision_points().len(), 1);
         assert_eq!(p.memory().len(), 1);
+    }
+
+    #[test]
+    fn the_memory_takes_the_nearest_point_of_a_cycle() {
+        let mut p = planner(Point::new(3_000, 0));
+        // The front and the front-left sensors both see something, the
+        // front-left nearer.
+        let (far, close) = (count_for(&p, 400), count_for(&p, 200));
+        let out = p.step_raw(at(0, 0, 0), &[0, close, far, 0, 0]);
+        assert_eq!(out.status, Status::Moving);
+        let seen = p.last_collision_points().to_vec();
+        assert_eq!(seen.len(), 2);
+        // Only the nearer one is remembered (the memory takes one a cycle).
+        let nearest = *seen
+            .iter()
+            .min_by_key(|q| q.distance_mm(Point::new(0, 0)))
+            .unwrap();
+        let kept: std::vec::Vec<Point> = p.memory().iter().map(|r| r.point).collect();
+        assert_eq!(kept, [nearest]);
     }
 
     #[test]

@@ -13,16 +13,19 @@
 //! Capacity and eviction: at most [`MEMORY_CAPACITY`] points. A new point
 //! within [`MERGE_MM`] of a remembered one of the same class is not stored
 //! again (a wall seen on consecutive cycles would otherwise fill the memory
-//! with near-copies); "remembered" means held when the cycle began or
-//! stored earlier in the same cycle, so a point evicted during the cycle
-//! still takes merges until it ends (no search for it among the merge
-//! candidates). When the memory is full the *oldest* point is evicted: the
-//! most recent obstacles are the ones the robot is dealing with.
+//! with near-copies). When the memory is full the *oldest* point is
+//! evicted: the most recent obstacles are the ones the robot is dealing
+//! with.
+//!
+//! Ours: the planner gives the memory one point a cycle, the nearest of the
+//! cycle's collision points (the paper stores every one). That bounds a
+//! cycle's work to one store, whatever the five beams see, and spreads the
+//! slots over the last [`MEMORY_CAPACITY`] distinct obstacles met rather
+//! than the last few cycles along one wall (see `docs/bench.md`, "One point
+//! a cycle", for what it changed).
 
 use crate::fixed::{box_within, Angle, Point};
 use crate::ring::Ring;
-use crate::sensors::SENSOR_COUNT;
-use heapless::Vec;
 
 /// Most remembered collision points.
 pub const MEMORY_CAPACITY: usize = 16;
@@ -223,6 +226,10 @@ impl Memory {
     /// Classify and remember a collision point detected with the robot at
     /// `robot` heading `heading`, target `target`. Returns whether it was
     /// stored (it may be ignored, or merged into a near one).
+    ///
+    /// One scan of the memory for a merge, and one more for the midpoint's
+    /// sums when the robot has moved since they were kept (the midpoint
+    /// needs that scan this cycle anyway).
     pub fn remember(
         &mut self,
         point: Point,
@@ -231,94 +238,31 @@ impl Memory {
         target: Point,
         diagonal_tolerance: Angle,
     ) -> bool {
-        self.remember_all(&[point], robot, heading, target, diagonal_tolerance) == 1
-    }
-
-    /// [`Memory::remember`] for the collision points of one cycle, in
-    /// order (a point merges into one held when the cycle began or stored
-    /// earlier in it), classifying once. Returns how many were stored.
-    pub fn remember_all(
-        &mut self,
-        points: &[Point],
-        robot: Point,
-        heading: Angle,
-        target: Point,
-        diagonal_tolerance: Angle,
-    ) -> usize {
-        // A cycle has at most one point per sensor; longer lists go in
-        // groups of that size, each merging into what the last stored.
-        points
-            .chunks(SENSOR_COUNT)
-            .map(|group| self.remember_group(group, robot, heading, target, diagonal_tolerance))
-            .sum()
-    }
-
-    /// [`Memory::remember_all`] for one cycle's collision points, at most
-    /// one per sensor (the planner's case; points beyond [`SENSOR_COUNT`]
-    /// are not looked at).
-    pub(crate) fn remember_group(
-        &mut self,
-        points: &[Point],
-        robot: Point,
-        heading: Angle,
-        target: Point,
-        diagonal_tolerance: Angle,
-    ) -> usize {
-        let class = direction_class(heading, diagonal_tolerance);
+        let new = Remembered {
+            point,
+            class: direction_class(heading, diagonal_tolerance),
+        };
         let span = Span::new(robot, target);
-        // Only the points the span's rule keeps can be stored or merged.
-        let mut kept: Vec<Point, SENSOR_COUNT> = Vec::new();
-        for &point in points {
-            if span.holds(&Remembered { point, class }) {
-                let _ = kept.push(point);
-            }
+        if !span.holds(&new)
+            || self
+                .points
+                .as_slice()
+                .iter()
+                .any(|q| q.class == new.class && near(q.point, point))
+        {
+            return false;
         }
-        if kept.is_empty() {
-            return 0;
-        }
-        // One pass over the memory picks the points a new one could merge
-        // into: same class, inside the box around this cycle's kept points
-        // widened by the merge distance. The per-point scans then run over
-        // these few (a wall seen again), not the whole memory.
-        let mut lo = Point::new(i16::MAX, i16::MAX);
-        let mut hi = Point::new(i16::MIN, i16::MIN);
-        for p in &kept {
-            lo = Point::new(lo.x.min(p.x), lo.y.min(p.y));
-            hi = Point::new(hi.x.max(p.x), hi.y.max(p.y));
-        }
-        let reach = Span::around(lo, hi, MERGE_MM);
-        // The candidates' positions, copied: the per-point scans below then
-        // run over a short contiguous slice.
-        let mut candidates: Vec<Point, { MEMORY_CAPACITY + SENSOR_COUNT }> = Vec::new();
-        for q in self.points.as_slice() {
-            let (in_x, in_y) = reach.axes(q.point);
-            if q.class == class && in_x && in_y {
-                let _ = candidates.push(q.point);
-            }
-        }
-        // The midpoint's sums for this robot position and target, kept up
-        // to date below.
+        // A stored point is active (the span's rule let it in): the kept
+        // sums gain it, and lose the point it evicts if that was active.
         let mut sums = self.sums_at(robot, target);
-        let mut stored = 0;
-        for &point in &kept {
-            if candidates.iter().any(|&q| near(q, point)) {
-                continue;
+        sums.add(point);
+        if let Some(gone) = self.points.push(new) {
+            if span.holds(&gone) {
+                sums.remove(gone.point);
             }
-            // A kept point is active: the span's rule let it in.
-            sums.add(point);
-            // Later points of this cycle may merge into this one. (Into the
-            // point it evicted, if any, too: the cycle's points are compared
-            // with the memory as the cycle found it and with each other.)
-            if let Some(gone) = self.points.push(Remembered { point, class }) {
-                if span.holds(&gone) {
-                    sums.remove(gone.point);
-                }
-            }
-            let _ = candidates.push(point);
-            stored += 1;
         }
         self.sums = Some(sums);
-        stored
+        true
     }
 
     /// `(n, Σ(P_R − P_i))` over the active points: the direction of
@@ -450,66 +394,52 @@ mod tests {
         assert!(m.is_empty() && m.iter().next().is_none());
     }
 
-    /// The memory as the rules state it, one cycle's points (a group) at
-    /// a time, for the tests: a point is stored unless held by the span's
-    /// rule or near a point of the same class that the memory held when
-    /// the cycle began or that the cycle stored before it; when full, it
-    /// overwrites the oldest. Returns how many were stored.
+    /// The memory as the rules state it, for the tests: a point is stored
+    /// unless the span's rule drops it or it is near a held point of the
+    /// same class; when full, it overwrites the oldest. Returns whether it
+    /// was stored.
     fn naive(
         mem: &mut std::vec::Vec<Remembered>,
         oldest: &mut usize,
-        group: &[Remembered],
+        r: Remembered,
         span: Span,
-    ) -> usize {
-        let mut seen = mem.clone();
-        let mut stored = 0;
-        for &r in group {
-            if !span.holds(&r)
-                || seen
-                    .iter()
-                    .any(|q| near(q.point, r.point) && q.class == r.class)
-            {
-                continue;
-            }
-            seen.push(r);
-            stored += 1;
-            if mem.len() < MEMORY_CAPACITY {
-                mem.push(r);
-            } else {
-                mem[*oldest] = r;
-                *oldest = (*oldest + 1) % MEMORY_CAPACITY;
-            }
+    ) -> bool {
+        if !span.holds(&r)
+            || mem
+                .iter()
+                .any(|q| near(q.point, r.point) && q.class == r.class)
+        {
+            return false;
         }
-        stored
+        if mem.len() < MEMORY_CAPACITY {
+            mem.push(r);
+        } else {
+            mem[*oldest] = r;
+            *oldest = (*oldest + 1) % MEMORY_CAPACITY;
+        }
+        true
     }
 
     proptest::proptest! {
-        /// Remembering a cycle's points in one pass stores what the rules
-        /// applied point by point store, evictions included.
+        /// Remembering stores what the rules store, evictions included, and
+        /// gives the points back oldest first.
         #[test]
-        fn one_pass_equals_the_rules_point_by_point(
-            cycles in proptest::collection::vec(
-                (proptest::collection::vec((0i16..600, -300i16..300), 0..12), -180i16..180),
-                0..12,
+        fn remembering_follows_the_rules(
+            points in proptest::collection::vec(
+                (0i16..600, -300i16..300, -180i16..180),
+                0..60,
             ),
         ) {
             let (robot, target) = (Point::new(-10, -400), Point::new(700, 400));
             let span = Span::new(robot, target);
             let mut a = Memory::new();
             let (mut model, mut oldest) = (std::vec::Vec::new(), 0usize);
-            for (cycle, deg) in &cycles {
-                let heading = Angle::from_deg(*deg);
+            for &(x, y, deg) in &points {
+                let heading = Angle::from_deg(deg);
+                let point = Point::new(x, y);
                 let class = direction_class(heading, TOL);
-                let pts: std::vec::Vec<Point> =
-                    cycle.iter().map(|&(x, y)| Point::new(x, y)).collect();
-                let group: std::vec::Vec<Remembered> =
-                    pts.iter().map(|&point| Remembered { point, class }).collect();
-                let m: usize = group
-                    .chunks(SENSOR_COUNT)
-                    .map(|g| naive(&mut model, &mut oldest, g, span))
-                    .sum();
-                let n = a.remember_all(&pts, robot, heading, target, TOL);
-                proptest::prop_assert_eq!(n, m);
+                let want = naive(&mut model, &mut oldest, Remembered { point, class }, span);
+                proptest::prop_assert_eq!(a.remember(point, robot, heading, target, TOL), want);
                 proptest::prop_assert!(a.points.as_slice().iter().eq(model.iter()));
                 let (newer, older) = model.split_at(oldest);
                 proptest::prop_assert!(a.iter().eq(older.iter().chain(newer)));
@@ -542,7 +472,9 @@ mod tests {
                     let want = m.scan_sums(robot, target).away_from(robot);
                     proptest::prop_assert_eq!(m.away_from_midpoint_kept(robot, target), want);
                 }
-                m.remember_all(&pts, robot, Angle::from_deg(*deg), target, TOL);
+                for &p in &pts {
+                    m.remember(p, robot, Angle::from_deg(*deg), target, TOL);
+                }
                 for probe in [robot, Point::new(300, 0)] {
                     let s = m.scan_sums(probe, target);
                     let k = s.n as i32;

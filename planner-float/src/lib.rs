@@ -246,7 +246,17 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         };
         let between = |v: F, a: F, b: F| v >= a.min(b) && v <= a.max(b);
         let n60 = c::<F>(60.0);
+        // Only the nearest point of the cycle goes to the memory.
+        let mut nearest: Option<(usize, F)> = None;
         for &(i, d) in pts.iter() {
+            if let Some((_, best)) = nearest {
+                self.near(d, best);
+            }
+            if nearest.is_none_or(|(_, best)| d < best) {
+                nearest = Some((i, d));
+            }
+        }
+        if let Some((i, d)) = nearest {
             let a = h + c::<F>(ANGLES[i]).to_radians();
             let p = (x + d * M::cos(a), y + d * M::sin(a));
             let (ix, iy) = (between(p.0, x, self.goal.0), between(p.1, y, self.goal.1));
