@@ -65,6 +65,10 @@ use forces::Motion;
 /// (see the sector rule in [`Planner::step_raw`]).
 const BEHIND: Angle = Angle::from_deg(120);
 
+/// One revolution in [`Angle`] units (see the pocket rule in
+/// [`Planner::step_raw`]).
+const FULL_TURN: u32 = 65_536;
+
 /// The rover's pose from odometry.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -87,6 +91,7 @@ pub struct Planner {
     following: bool,
     turn_side: i8,
     spun: bool,
+    turned_in_place: u32,
     paper_step_mm: u16,
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
@@ -106,6 +111,7 @@ impl Planner {
             following: false,
             turn_side: 0,
             spun: false,
+            turned_in_place: 0,
             paper_step_mm: range,
             unreachable: false,
             last_points: heapless::Vec::new(),
@@ -124,6 +130,7 @@ impl Planner {
         self.following = false;
         self.turn_side = 0;
         self.spun = false;
+        self.turned_in_place = 0;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
         self.last_points.clear();
@@ -317,6 +324,26 @@ impl Planner {
             step = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
         }
         self.spun = spin && step == 0;
+        // Ours: a full turn on the spot without a step is the same livelock
+        // with something in sight (in a pocket every heading's force is
+        // clamped to the sector edge, where the way is not free, round and
+        // round; the escape's virtual obstacles cannot help a rover that
+        // never moves). Then advance where the rover faces, if free.
+        if step == 0 {
+            self.turned_in_place = self
+                .turned_in_place
+                .saturating_add(relative.abs_signed() as u32);
+            if self.turned_in_place >= FULL_TURN {
+                let ahead = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
+                if ahead > 0 {
+                    heading = pose.heading;
+                    step = ahead;
+                }
+            }
+        }
+        if step > 0 {
+            self.turned_in_place = 0;
+        }
         Output {
             command: Command {
                 heading,
@@ -490,6 +517,43 @@ mod tests {
         // After that advance, a pure turn is allowed again.
         let out = p.step_raw(at(0, (free / 2) as i16, 0), &[0; 5]).command;
         assert_eq!(out.step_mm, 0);
+    }
+
+    #[test]
+    fn a_full_turn_in_a_pocket_ends_in_a_step_out() {
+        // Obstacles at every sensor face ("too close") unless the rover
+        // faces 225° ..= 305°; the goal is east. Each cycle the force points
+        // back and is clamped to the sector edge, where the way is blocked:
+        // 40° turns on the spot; facing the opening (the cycle after the
+        // fold-back filter distrusted the view's jump) the force points
+        // outside the sector, and the rover turns on. After a full turn it
+        // steps out where it faces, if that is free. (Without the rule the
+        // first step comes after one and a half turns, and off the heading
+        // faced: checked.)
+        let mut p = planner(Point::new(3_000, 0));
+        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        assert_eq!(p.readings(&[near; 5])[2], Reading::TooClose);
+        let open = |deg: f64| (225.0..=305.0).contains(&deg);
+        let mut heading = Angle::ZERO;
+        let mut turned = 0u32;
+        for _ in 0..30 {
+            let deg = heading.to_deg_f64().rem_euclid(360.0);
+            let raw = if open(deg) { [0; 5] } else { [near; 5] };
+            let pose = Pose {
+                position: Point::new(0, 0),
+                heading,
+            };
+            let out = p.step_raw(pose, &raw);
+            if out.command.step_mm > 0 {
+                assert_eq!(out.command.heading, heading, "out along the facing");
+                assert!(open(deg), "{deg}");
+                assert!(turned >= 65_536, "only after a full turn: {turned}");
+                return;
+            }
+            turned += out.command.heading.sub(heading).abs_signed() as u32;
+            heading = out.command.heading;
+        }
+        panic!("still turning on the spot after 30 cycles");
     }
 
     #[test]
