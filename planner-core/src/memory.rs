@@ -74,17 +74,11 @@ struct Span {
 
 impl Span {
     fn new(robot: Point, target: Point) -> Span {
-        Span::around(robot, target, 0)
-    }
-
-    /// The box with corners `a` and `b`, widened by `margin` on every side.
-    fn around(a: Point, b: Point, margin: u16) -> Span {
-        let m = margin as i32;
         Span {
-            x_lo: a.x.min(b.x) as i32 - m,
-            x_len: a.x.abs_diff(b.x) as u32 + 2 * m as u32,
-            y_lo: a.y.min(b.y) as i32 - m,
-            y_len: a.y.abs_diff(b.y) as u32 + 2 * m as u32,
+            x_lo: robot.x.min(target.x) as i32,
+            x_len: robot.x.abs_diff(target.x) as u32,
+            y_lo: robot.y.min(target.y) as i32,
+            y_len: robot.y.abs_diff(target.y) as u32,
         }
     }
 
@@ -184,11 +178,10 @@ impl ActiveSums {
 /// that run every cycle (merging, the midpoint) are single tight loops.
 ///
 /// It also keeps the midpoint's sums for the robot position and target of
-/// the last cycle that stored points or asked for the midpoint, updated as
-/// points come and go. While the
-/// rover turns in place, facing a wall and storing what its beams sweep
-/// over (the planner's most expensive cycles), the midpoint then costs no
-/// scan of the memory.
+/// the last cycle that stored a point or asked for the midpoint, updated as
+/// points come and go. While the rover turns in place, facing a wall and
+/// storing what its beams sweep over, the midpoint then costs no scan of
+/// the memory.
 #[derive(Clone, Debug, Default)]
 pub struct Memory {
     points: Ring<Remembered, MEMORY_CAPACITY>,
