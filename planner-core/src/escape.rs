@@ -170,6 +170,11 @@ pub struct Escape {
     /// place asks the same question every cycle.
     no_revisit_at: Option<(Point, u16)>,
     obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
+    /// The last answer of [`Escape::force_kept`] and its question (robot,
+    /// bearing): a rover turning in place asks the same question every
+    /// cycle, and a stuck one, surrounded by the obstacles it dropped, is
+    /// where the sum costs most. A drop forgets it.
+    kept_force: Option<(Point, Angle, Force)>,
 }
 
 impl Default for Escape {
@@ -190,6 +195,7 @@ impl Escape {
             crumbs: Deque::new(),
             no_revisit_at: None,
             obstacles: Ring::new(),
+            kept_force: None,
         }
     }
 
@@ -263,6 +269,7 @@ impl Escape {
 
     /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
     fn drop_at(&mut self, robot: Point, cfg: &EscapeConfig) {
+        self.kept_force = None;
         self.drops_since_best = self.drops_since_best.saturating_add(1);
         let held = self
             .obstacles
@@ -317,6 +324,27 @@ impl Escape {
             });
         }
         f
+    }
+
+    /// [`Escape::force`] for the planner: the answer is kept, and given
+    /// again while the rover stands where it stood, facing the same goal
+    /// bearing, and no obstacle has been dropped (the same `cfg` every call:
+    /// a planner's configuration does not change).
+    pub(crate) fn force_kept(&mut self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
+        match self.kept_force {
+            Some((at, b, f)) if at == robot && b == bearing => f,
+            _ => {
+                let f = self.force(cfg, robot, bearing);
+                self.kept_force = Some((robot, bearing, f));
+                f
+            }
+        }
+    }
+
+    /// Forget the kept force (tests compare against a fresh sum).
+    #[cfg(test)]
+    pub(crate) fn forget_kept(&mut self) {
+        self.kept_force = None;
     }
 
     /// Virtual obstacles, oldest first.
@@ -435,7 +463,8 @@ mod tests {
 
     proptest::proptest! {
         /// Skipping the trail search where it last found nothing changes
-        /// no verdict: the same walk with the search forced every cycle.
+        /// no verdict, and the kept force is the force: the same walk with
+        /// the search forced and the force summed every cycle.
         #[test]
         fn the_kept_search_result_changes_nothing(
             walk in proptest::collection::vec((0i16..4, 0i16..4, 0u16..3), 1..120),
@@ -451,6 +480,10 @@ mod tests {
                     let want = plain.observe(&cfg, robot, goal_mm);
                     proptest::prop_assert_eq!(kept.observe(&cfg, robot, goal_mm), want);
                     proptest::prop_assert!(kept.obstacles().eq(plain.obstacles()));
+                    // The kept force too (a stay repeats the question).
+                    let bearing = Angle(4_000 * i as u16);
+                    let fresh = plain.force(&cfg, robot, bearing);
+                    proptest::prop_assert_eq!(kept.force_kept(&cfg, robot, bearing), fresh);
                 }
             }
         }

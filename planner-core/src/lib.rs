@@ -96,6 +96,11 @@ pub struct Planner {
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
     last_readings: Readings,
+    /// Where the goal's distance and bearing were last worked out, and
+    /// them: a rover turning in place asks again every cycle.
+    kept_goal: Option<(Point, u16, Angle)>,
+    /// The midpoint force (eq. 13) and the sums it came from.
+    kept_midpoint: Option<(i32, i32, Force)>,
 }
 
 impl Planner {
@@ -116,6 +121,8 @@ impl Planner {
             unreachable: false,
             last_points: heapless::Vec::new(),
             last_readings: [Reading::Clear; SENSOR_COUNT],
+            kept_goal: None,
+            kept_midpoint: None,
         }
     }
 
@@ -135,6 +142,8 @@ impl Planner {
         self.unreachable = false;
         self.last_points.clear();
         self.last_readings = [Reading::Clear; SENSOR_COUNT];
+        self.kept_goal = None;
+        self.kept_midpoint = None;
     }
 
     /// The goal.
@@ -195,15 +204,22 @@ impl Planner {
             return stop(Status::SensorFault);
         }
         let robot = pose.position;
-        let goal_mm = robot.distance_mm(self.goal);
+        let (goal_mm, bearing) = match self.kept_goal {
+            Some((at, d, b)) if at == robot => (d, b),
+            _ => {
+                let (gx, gy) = robot.to(self.goal);
+                let d = robot.distance_mm(self.goal);
+                let b = Angle::atan2(gy, gx);
+                self.kept_goal = Some((robot, d, b));
+                (d, b)
+            }
+        };
         if goal_mm <= self.config.goal_tolerance_mm {
             return stop(Status::Arrived);
         }
         if self.unreachable {
             return stop(Status::Unreachable);
         }
-        let (gx, gy) = robot.to(self.goal);
-        let bearing = Angle::atan2(gy, gx);
         if self.escape.observe(&self.config.escape, robot, goal_mm) == Verdict::GiveUp {
             self.unreachable = true;
             return stop(Status::Unreachable);
@@ -253,10 +269,15 @@ impl Planner {
         // midpoint and off-sensor forces.
         let mut f = forces::attractive(cfg, bearing)
             .plus(repulsive)
-            .plus(self.escape.force(&cfg.escape, robot, bearing));
+            .plus(self.escape.force_kept(&cfg.escape, robot, bearing));
         if !near {
             let (_, ax, ay) = self.memory.away_from_midpoint_kept(robot, self.goal);
-            f = f.plus(forces::midpoint(cfg, ax, ay));
+            let mid = match self.kept_midpoint {
+                Some((x, y, m)) if (x, y) == (ax, ay) => m,
+                _ => forces::midpoint(cfg, ax, ay),
+            };
+            self.kept_midpoint = Some((ax, ay, mid));
+            f = f.plus(mid);
             if self.following {
                 f = f.plus(forces::off_sensor(cfg, heading_dir, motion, &readings));
             }
@@ -592,5 +613,30 @@ mod tests {
         );
         p.set_goal(Point::new(0, 3_000));
         assert_eq!(p.step_raw(at(0, 0, 90), &[0; 5]).status, Status::Moving);
+    }
+
+    proptest::proptest! {
+        /// The answers the planner keeps (the goal's distance and bearing,
+        /// the escape's force, the midpoint force) change no command: each
+        /// cycle against a copy that has forgotten them. Turns on the spot
+        /// (the same position, another heading) are where they are used.
+        #[test]
+        fn kept_answers_change_no_command(
+            cycles in proptest::collection::vec(
+                ((0i16..6, 0i16..6, 0u8..3), proptest::array::uniform5(0u16..600)),
+                1..150,
+            ),
+        ) {
+            let mut p = planner(Point::new(2_000, 1_500));
+            for ((i, j, turn), raw) in cycles {
+                let pose = at(150 * i, 150 * j, 120 * turn as i16);
+                let mut fresh = p.clone();
+                fresh.kept_goal = None;
+                fresh.kept_midpoint = None;
+                fresh.escape.forget_kept();
+                let want = fresh.step_raw(pose, &raw);
+                proptest::prop_assert_eq!(p.step_raw(pose, &raw), want);
+            }
+        }
     }
 }
