@@ -96,10 +96,11 @@ pub struct Planner {
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
     last_readings: Readings,
-    /// Where the goal's distance and bearing were last worked out, and
-    /// them: a rover turning in place asks again every cycle.
+    /// The goal's distance and bearing and the position they were worked
+    /// out at: a rover turning in place asks again every cycle.
     kept_goal: Option<(Point, u16, Angle)>,
-    /// The midpoint force (eq. 13) and the sums it came from.
+    /// The midpoint force (eq. 13) and the sums it came from (unchanged
+    /// while the rover turns in place and stores no new point).
     kept_midpoint: Option<(i32, i32, Force)>,
 }
 
