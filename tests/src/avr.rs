@@ -37,6 +37,11 @@ pub fn firmware_elf() -> PathBuf {
     build("firmware-avr", &[])
 }
 
+/// The `costs` bench: the step's parts timed on fixed inputs.
+pub fn costs_elf() -> PathBuf {
+    build("costs", &[])
+}
+
 /// The `f32-step` bench: the same step in f32 with avr-libc's math.
 pub fn f32_step_elf() -> PathBuf {
     build("f32-step", &["f32-step"])

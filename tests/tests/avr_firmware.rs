@@ -5,9 +5,9 @@
 //! Two budgets are not met yet and their tests are ignored with the reason
 //! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
 //! the step costs tens of thousands of cycles (32-bit arithmetic compiles
-//! to long AVR sequences: a 32-bit division ~590 cycles, a square root
-//! ~745, a virtual obstacle in reach ~2,700), and the firmware is ~25 KB of
-//! flash.
+//! to long AVR sequences: a 32-bit division ~710 cycles, a square root up
+//! to ~1,500, a virtual obstacle in reach ~3,100; `avr_costs.rs` prints
+//! them), and the firmware is ~25 KB of flash.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};

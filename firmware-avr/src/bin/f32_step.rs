@@ -7,6 +7,8 @@
 #![no_main]
 #![feature(abi_avr_interrupt)]
 
+#[path = "../bench.rs"]
+mod bench;
 #[path = "../board.rs"]
 #[allow(dead_code)]
 mod board;
@@ -22,7 +24,7 @@ mod serial;
 use core::f32::consts::TAU;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::protocol::{self, Request};
-use planner_core::{AdcProfile, Angle, Command, ConfigBuilder, Output};
+use planner_core::{Angle, Command, Output};
 use planner_float::{FloatPlanner, Math};
 use ufmt::uwriteln;
 
@@ -65,29 +67,13 @@ impl Math<f32> for AvrLibc {
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
-    loop {
-        avr_device::asm::nop();
-    }
+    bench::halt()
 }
 
 #[avr_device::entry]
 fn main() -> ! {
-    let Some(dp) = board::Dp::take() else {
-        loop {
-            avr_device::asm::nop();
-        }
-    };
-    clock::init(&dp);
-    clock::stop_tick(&dp);
-    serial::init(&dp);
-    // SAFETY: every shared static is behind an interrupt-free Mutex.
-    unsafe { avr_device::interrupt::enable() };
+    let cfg = bench::start();
     let mut out = serial::Serial;
-    let Ok(cfg) = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build() else {
-        loop {
-            avr_device::asm::nop();
-        }
-    };
     let _ = uwriteln!(out, "READY");
     let mut lines = protocol::LineReader::new();
     loop {

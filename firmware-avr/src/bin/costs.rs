@@ -1,0 +1,150 @@
+//! The `costs` bench: what the planner step's parts cost on the ATmega328P.
+//!
+//! Times the fixed-point primitives the step is built of (a 32-bit
+//! division and multiply, the square root, `hypot`, `atan2`, the sine,
+//! `1/d²`, the free-distance rule) and the virtual obstacles' force with
+//! 1 to 8 obstacles in reach, each on fixed inputs, and prints one line per
+//! call: `C name a b result_x result_y cycles`, then `END`. The test that
+//! runs it (`tests/tests/avr_costs.rs`) checks every result against the
+//! host's and prints the cycles. It drives no motors and reads no input.
+#![no_std]
+#![no_main]
+#![feature(abi_avr_interrupt)]
+
+#[path = "../bench.rs"]
+mod bench;
+#[path = "../board.rs"]
+#[allow(dead_code)]
+mod board;
+#[path = "../clock.rs"]
+#[allow(dead_code)]
+mod clock;
+#[path = "../serial.rs"]
+#[allow(dead_code)]
+mod serial;
+
+use core::hint::black_box;
+use core::sync::atomic::{compiler_fence, Ordering};
+use planner_core::command::free_distance_mm;
+use planner_core::escape::{Escape, EscapeConfig};
+use planner_core::fixed::{hypot, inverse_square_force, isqrt};
+use planner_core::{Angle, Point, Reading};
+use serial::Serial;
+use ufmt::uwriteln;
+
+#[panic_handler]
+fn panic(_: &core::panic::PanicInfo) -> ! {
+    bench::halt()
+}
+
+/// Cycles of `f()`, fenced so that the compiler cannot move work out of the
+/// measured span, less `overhead`. One shape for every measurement (not
+/// inlined, `f` called through a pointer), so that the cost of the
+/// measurement itself is the same each time and `overhead` can be it.
+#[inline(never)]
+fn timed(overhead: u32, f: &mut dyn FnMut() -> (i32, i32)) -> ((i32, i32), u32) {
+    let t0 = clock::cycles();
+    compiler_fence(Ordering::SeqCst);
+    let r = black_box(f());
+    compiler_fence(Ordering::SeqCst);
+    let t1 = clock::cycles();
+    (r, t1.wrapping_sub(t0).wrapping_sub(overhead))
+}
+
+/// One result line.
+fn report(name: &str, a: i32, b: i32, ((x, y), cycles): ((i32, i32), u32)) {
+    let _ = uwriteln!(Serial, "C {} {} {} {} {} {}", name, a, b, x, y, cycles);
+}
+
+#[avr_device::entry]
+fn main() -> ! {
+    let cfg = bench::start();
+    let _ = uwriteln!(Serial, "READY");
+    // The measurement's own cost: a span that only passes a value through.
+    let overhead = timed(0, &mut || black_box((0, 0))).1;
+
+    // The same span again: what is left is the measurement's error.
+    for v in [1i32, 2] {
+        report("nothing", v, 0, timed(overhead, &mut || black_box((v, 0))));
+    }
+    for (a, b) in [
+        (1_024_000_000u32, 8_281u32),
+        (123_456_789, 1_234),
+        (5_000, 7),
+    ] {
+        let t = timed(overhead, &mut || ((black_box(a) / black_box(b)) as i32, 0));
+        report("div_u32", a as i32, b as i32, t);
+    }
+    for (a, b) in [(123_456i32, -789i32), (46_341, 46_340)] {
+        let t = timed(overhead, &mut || {
+            (black_box(a).wrapping_mul(black_box(b)), 0)
+        });
+        report("mul_i32", a, b, t);
+    }
+    for v in [99u32, 65_535, 1_000_000, 6_500_000, 2_000_000_000] {
+        let t = timed(overhead, &mut || (isqrt(black_box(v)) as i32, 0));
+        report("isqrt", v as i32, 0, t);
+    }
+    for (dx, dy) in [(150i32, 20i32), (3_000, -4_000), (-12_000, 9_000)] {
+        let t = timed(overhead, &mut || {
+            (hypot(black_box(dx), black_box(dy)) as i32, 0)
+        });
+        report("hypot", dx, dy, t);
+    }
+    for (y, x) in [(1i32, 1_000i32), (-700, 300), (2_500, -2_400)] {
+        let t = timed(overhead, &mut || {
+            (Angle::atan2(black_box(y), black_box(x)).0 as i32, 0)
+        });
+        report("atan2", y, x, t);
+    }
+    for deg in [10i16, 100, -135] {
+        let a = Angle::from_deg(deg);
+        let t = timed(overhead, &mut || (black_box(a).sin(), 0));
+        report("sin", deg as i32, 0, t);
+    }
+    for d in [91u16, 200, 1_500] {
+        let t = timed(overhead, &mut || (inverse_square_force(black_box(d)), 0));
+        report("inverse_square", d as i32, 0, t);
+    }
+    let clear = [Reading::Clear; 5];
+    let near = [
+        Reading::Range(300),
+        Reading::Range(180),
+        Reading::Clear,
+        Reading::Range(420),
+        Reading::TooClose,
+    ];
+    for (name, readings) in [("free_clear", clear), ("free_near", near)] {
+        for deg in [0i16, 25] {
+            let rel = Angle::from_deg(deg);
+            let t = timed(overhead, &mut || {
+                let f = free_distance_mm(&cfg, black_box(&readings), black_box(rel));
+                (f as i32, 0)
+            });
+            report(name, deg as i32, 0, t);
+        }
+    }
+    // Virtual obstacles: a rover creeping 40 mm every twelve cycles is
+    // stuck and drops one each time (see `escape`); the force is timed
+    // 300 mm away as each is added, up to eight.
+    let esc = EscapeConfig::default();
+    let mut escape = Escape::new();
+    let (mut held, mut k) = (0, 0i16);
+    while held < 8 && k < 200 {
+        let _ = escape.observe(&esc, Point::new(40 * (k / 12), 0), 5_000);
+        k += 1;
+        if escape.len() > held {
+            held = escape.len();
+            let probe = Point::new(300, -200);
+            let t = timed(overhead, &mut || {
+                let f = escape.force(&esc, black_box(probe), black_box(Angle::ZERO));
+                (f.x, f.y)
+            });
+            report("vo_force", held as i32, 0, t);
+        }
+    }
+    let _ = uwriteln!(Serial, "END");
+    loop {
+        avr_device::asm::nop();
+    }
+}
