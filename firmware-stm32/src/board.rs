@@ -33,7 +33,7 @@ const COUNTS_PER_TICK: i32 = 4;
 
 pub fn run() -> ! {
     let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
-        panic!("peripherals taken twice")
+        defmt::panic!("peripherals taken twice")
     };
     let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(84.MHz()));
     let gpioa = dp.GPIOA.split(&mut rcc);
@@ -81,7 +81,7 @@ pub fn run() -> ! {
         .USART1
         .serial((gpioa.pa9, gpioa.pa10), 115_200.bps(), &mut rcc)
     else {
-        panic!("serial set-up")
+        defmt::panic!("serial set-up")
     };
     let (mut tx, mut rx) = serial.split();
 
@@ -96,7 +96,7 @@ pub fn run() -> ! {
     syst.enable_counter();
 
     let Ok(config) = ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3).build() else {
-        panic!("bad config")
+        defmt::panic!("bad config")
     };
     let mut planner = Planner::new(config, Point::new(0, 0));
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
