@@ -11,7 +11,7 @@
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
-use rover_tests::{mean_worst, standard_traces, Trace};
+use rover_tests::{clean_cargo, mean_worst, repo_root, standard_traces, Trace};
 use std::sync::OnceLock;
 
 /// Worst planner step allowed, cycles (issue 5's budget).
@@ -176,4 +176,23 @@ fn f32_bench_computes_the_same_float_step() {
         "f32 step on the AVR: mean={mean} worst={worst} cycles ({agree}/{total} steps agree with the host); fixed-point worst {fixed_worst}"
     );
     assert!(agree * 100 >= total * 95, "{agree}/{total} steps agree");
+}
+
+#[test]
+fn cargo_run_flashes_the_firmware() {
+    // The README's flash command, `cargo run --release` in firmware-avr,
+    // must pick the firmware among the binaries (the benches need `--bin`);
+    // the runner (ravedude) replaced by `echo`, which prints the ELF path.
+    let out = clean_cargo(&repo_root().join("firmware-avr"))
+        .args(["run", "--release", "--quiet", "--config"])
+        .arg("target.avr-none.runner = \"echo\"")
+        .output()
+        .expect("run cargo for firmware-avr");
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "cargo run failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.trim().ends_with("firmware-avr.elf"), "ran {stdout}");
 }
