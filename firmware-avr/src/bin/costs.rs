@@ -4,9 +4,13 @@
 //! division and multiply, the square root, `hypot`, `atan2`, the sine,
 //! `1/d²`, the free-distance rule) and the virtual obstacles' force with
 //! 1 to 8 obstacles in reach, each on fixed inputs, and prints one line per
-//! call: `C name a b result_x result_y cycles`, then `END`. The test that
-//! runs it (`tests/tests/avr_costs.rs`) checks every result against the
-//! host's and prints the cycles. It drives no motors and reads no input.
+//! call: `C name a b result_x result_y cycles`, then `END`. The figures are
+//! what a call costs in place, with its operands passed through
+//! `black_box` (which matters for the cheapest ones, a multiply); the
+//! `nothing` lines time an empty span, the measurement's own residual. The
+//! test that runs it (`tests/tests/avr_costs.rs`) checks every result
+//! against the host's and prints the cycles. It drives no motors and reads
+//! no input.
 #![no_std]
 #![no_main]
 #![feature(abi_avr_interrupt)]
