@@ -335,8 +335,16 @@ fn isqrt_bitwise(v: u32) -> u16 {
     }
     let mut rem = v;
     let mut root: u32 = 0;
-    // Start at the highest even power of two not above v.
-    let mut bit: u32 = 1 << ((31 - v.leading_zeros()) & !1);
+    // Start at the highest even power of two not above v: by halves and a
+    // byte, then two bits at a time (`1 << leading_zeros(..)` would be a
+    // call and a shift loop of up to 30 turns on the AVR).
+    let mut bit: u32 = if v >= 1 << 16 { 1 << 30 } else { 1 << 14 };
+    if bit >> 8 > v {
+        bit >>= 8;
+    }
+    while bit > v {
+        bit >>= 2;
+    }
     while bit != 0 {
         if rem >= root + bit {
             rem -= root + bit;
