@@ -43,14 +43,17 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
             (free_distance_mm(&cfg, &readings, rel) as i32, 0)
         }
         "vo_force" => {
-            // The bench's drop sequence, up to `a` obstacles held.
+            // The bench's drop sequence (bounded as there), up to `a`
+            // obstacles held.
             let esc = EscapeConfig::default();
             let mut escape = Escape::new();
-            let mut k = 0i16;
-            while escape.len() < a as usize {
+            for k in 0..200i16 {
+                if escape.len() >= a as usize {
+                    break;
+                }
                 let _ = escape.observe(&esc, Point::new(40 * (k / 12), 0), 5_000);
-                k += 1;
             }
+            assert_eq!(escape.len(), a as usize, "the drop sequence holds {a}");
             let f = escape.force(&esc, Point::new(300, -200), Angle::ZERO);
             (f.x, f.y)
         }

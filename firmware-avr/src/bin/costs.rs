@@ -148,7 +148,5 @@ fn main() -> ! {
         }
     }
     let _ = uwriteln!(Serial, "END");
-    loop {
-        avr_device::asm::nop();
-    }
+    bench::halt()
 }
