@@ -11,13 +11,16 @@
 //!   newest do not count).
 //!
 //! Then a virtual obstacle of radius `V_r` is dropped where the rover stands
-//! (§3: "put a virtual obstacle there"). It repels with `K_v / d²`, `d` the
-//! distance from its centre but never less than `V_r` (the §3 potential
-//! `K_v / r²` made finite inside the obstacle, as a force with the law of
-//! eq. 10), away from `V` (away from the goal for a rover standing exactly
-//! on it). `K_v` = 0.1 makes it worth 4.4 units at its rim, about twice the
-//! attraction: enough to destroy the minimum, not so much that the rover
-//! flees. The pit fills and the rover spills out of it.
+//! (§3: "put a virtual obstacle there"). Its push is the §3 potential's: the
+//! gradient of `K_v / r²` falls as the cube of the distance, so a virtual
+//! obstacle pushes with `p · (V_r / r)³` at `r` from its centre and with `p`
+//! inside its radius (finite there, where §3's is infinite), `p = K_v / V_r²`
+//! its push at the rim, away from `V` (away from the goal for a rover
+//! standing exactly on it). `K_v` = 0.1 makes `p` 4.4 units, about twice
+//! the attraction: enough to destroy the minimum, not so much that the
+//! rover flees; the cube keeps the push local (1/8 of it at twice the
+//! radius), so the obstacles of one pit do not push the rover out of the
+//! next passage. The pit fills and the rover spills out of it.
 //!
 //! A drop within [`VIRTUAL_MERGE_MM`] of a virtual obstacle already held
 //! adds to that one's weight instead of taking a slot: a rover stuck turning
@@ -26,8 +29,9 @@
 //!
 //! Reach: an obstacle is skipped where its push has fallen below
 //! [`VIRTUAL_MIN_PUSH`] (1/32 of a force unit, 1/64 of the attraction, under
-//! a degree of heading); the distance where that happens is kept with it, so
-//! the test is two compares instead of a square root and two divisions.
+//! a degree of heading); that distance, rounded up to an eighth of the
+//! radius, is kept with it, so the test is two compares instead of a
+//! division (5.25 radii, 788 mm, for one drop with the defaults).
 //!
 //! Bounded memory: at most [`VIRTUAL_CAPACITY`] virtual obstacles,
 //! [`CRUMB_CAPACITY`] breadcrumbs and [`WINDOW_CAPACITY`] recent positions;
@@ -41,8 +45,7 @@
 //! lets the best distance improve).
 
 use crate::fixed::{
-    hypot, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
-    MAX_SCALED,
+    inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
 };
 use crate::ring::Ring;
 use heapless::Deque;
@@ -50,9 +53,13 @@ use heapless::Deque;
 /// Most virtual obstacles kept.
 pub const VIRTUAL_CAPACITY: usize = 24;
 /// A drop nearer than this (mm) to a held virtual obstacle strengthens it.
-pub const VIRTUAL_MERGE_MM: u16 = 16;
+pub const VIRTUAL_MERGE_MM: u16 = 40;
 /// A virtual obstacle whose push is below this (Q10) is skipped.
 pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
+/// The strongest push of one drop, at its rim (Q10: 64 force units, 32
+/// times the attraction; the default is 4.4). It bounds the products of
+/// [`Escape::force`] below 2^32.
+pub const MAX_PUSH: i32 = u16::MAX as i32;
 /// Most breadcrumbs kept.
 pub const CRUMB_CAPACITY: usize = 16;
 /// Longest stuck-detection window, cycles.
@@ -144,16 +151,84 @@ pub struct VirtualObstacle {
 impl VirtualObstacle {
     /// A virtual obstacle of `weight` drops at `centre`.
     pub fn new(cfg: &EscapeConfig, centre: Point, weight: u8) -> Self {
-        // weight·K_v / d² < min ⇔ d² > weight·K_v·(10⁶ mm² / min), with K_v
-        // and min both Q10; saturating (a reach of ~65 m) if that overflows.
-        const MM2_PER_MIN: u32 = 1_000_000 / VIRTUAL_MIN_PUSH as u32;
-        let k = (weight as u32).saturating_mul(cfg.k_v.max(0) as u32);
         VirtualObstacle {
             centre,
             weight,
-            reach_mm: isqrt(k.saturating_mul(MM2_PER_MIN)).saturating_add(1),
+            reach_mm: reach_mm(&Law::of(cfg), weight),
         }
     }
+}
+
+/// The push law's constants, worked out from the configuration once (at a
+/// drop) rather than for every obstacle of every cycle.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+struct Law {
+    /// `V_r`, mm.
+    radius_mm: u16,
+    /// `p`: the push of one drop at the rim, `K_v / V_r²` in Q10 force
+    /// units (`V_r` below 91 mm counts as 91 mm here, as in
+    /// [`inverse_square_force`]), at most [`MAX_PUSH`].
+    rim: u16,
+    /// `V_r²` in mm², shifted right by `shift` below 2^16, so that
+    /// `rim_sq << 15` plus half of any `s` fits.
+    rim_sq: u16,
+    shift: u8,
+    /// `2^16 / V_r`, rounded: a multiply instead of a division by `V_r`
+    /// per component (0.1 % off at the default 150 mm, 1.5 % at 2 m).
+    per_radius_q16: u16,
+}
+
+impl Law {
+    fn of(cfg: &EscapeConfig) -> Law {
+        let v_r = cfg.radius_mm.max(1) as u32;
+        let rim =
+            ((inverse_square_force(cfg.radius_mm) >> 4) * cfg.k_v.max(0)) >> (FORCE_SHIFT - 4);
+        let mut rim_sq = v_r * v_r;
+        let mut shift = 0;
+        while rim_sq >= 1 << 16 {
+            rim_sq >>= 1;
+            shift += 1;
+        }
+        Law {
+            radius_mm: v_r as u16,
+            rim: rim.clamp(0, MAX_PUSH) as u16,
+            rim_sq: rim_sq as u16,
+            shift,
+            // 6,554 at most (V_r ≥ 10 mm).
+            per_radius_q16: (((1 << 16) + v_r / 2) / v_r) as u16,
+        }
+    }
+}
+
+/// The push `p` of an obstacle the rover stands exactly on: straight away
+/// from the goal. Out of line and cold: LLVM would otherwise work out its
+/// sine and cosine before the loop, on every call, for a case that almost
+/// never comes.
+#[cold]
+#[inline(never)]
+fn away_from_goal(bearing: Angle, rim: u32) -> Force {
+    Force::along(bearing.add(Angle::HALF), rim as i32)
+}
+
+/// Where the push of `weight` drops falls below [`VIRTUAL_MIN_PUSH`]:
+/// `w·p·(V_r / r)³ < min` ⇔ `r > V_r · ∛(w·p / min)`, rounded up to an
+/// eighth of `V_r` (the least `h` with `(h/8)³ · min ≥ w·p`, found by
+/// halving), at most 32,767 mm (a push from farther is ignored: the world
+/// is ±32 m).
+fn reach_mm(law: &Law, weight: u8) -> u16 {
+    // (h/8)³·32 ≥ w·p ⇔ h³ ≥ 16·w·p; w·p < 2^24, so both sides < 2^30.
+    const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
+    let need = 16 * law.rim as u32 * weight as u32;
+    let (mut lo, mut hi) = (0u32, 1_024u32);
+    while lo < hi {
+        let h = (lo + hi) / 2;
+        if h * h * h >= need {
+            hi = h;
+        } else {
+            lo = h + 1;
+        }
+    }
+    (law.radius_mm as u32 * lo).div_ceil(8).min(i16::MAX as u32) as u16
 }
 
 /// Progress monitor and virtual obstacles.
@@ -175,6 +250,9 @@ pub struct Escape {
     /// cycle, and a stuck one, surrounded by the obstacles it dropped, is
     /// where the sum costs most. A drop forgets it.
     kept_force: Option<(Point, Angle, Force)>,
+    /// The push law of the configuration of the last drop (a planner's
+    /// configuration does not change).
+    law: Law,
 }
 
 impl Default for Escape {
@@ -196,6 +274,13 @@ impl Escape {
             no_revisit_at: None,
             obstacles: Ring::new(),
             kept_force: None,
+            law: Law {
+                radius_mm: 0,
+                rim: 0,
+                rim_sq: 0,
+                shift: 0,
+                per_radius_q16: 0,
+            },
         }
     }
 
@@ -270,26 +355,40 @@ impl Escape {
     /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
     fn drop_at(&mut self, robot: Point, cfg: &EscapeConfig) {
         self.kept_force = None;
+        self.law = Law::of(cfg);
+        let law = &self.law;
+        let new = |centre, weight| VirtualObstacle {
+            centre,
+            weight,
+            reach_mm: reach_mm(law, weight),
+        };
         self.drops_since_best = self.drops_since_best.saturating_add(1);
         let held = self
             .obstacles
             .iter_mut()
             .find(|v| within(v.centre, robot, VIRTUAL_MERGE_MM));
         if let Some(v) = held {
-            *v = VirtualObstacle::new(cfg, v.centre, v.weight.saturating_add(1));
+            *v = new(v.centre, v.weight.saturating_add(1));
         } else {
-            self.obstacles.push(VirtualObstacle::new(cfg, robot, 1));
+            self.obstacles.push(new(robot, 1));
         }
         self.dropped = self.dropped.saturating_add(1);
     }
 
     /// The summed repulsion of the virtual obstacles on the rover at
-    /// `robot`, whose goal bearing is `bearing`: `K_v / max(d, V_r)²` each,
-    /// along the unit vector `(dx, dy) / r` from the obstacle's centre (`r`
-    /// its true distance), computed as components: no angle, so no `atan2`
-    /// and no sine per obstacle.
-    pub fn force(&self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
-        // At most 24 terms below 2^25 each: the sum stays below 2^30, so a
+    /// `robot`, whose goal bearing is `bearing`: `w·p·(V_r / r)³` each
+    /// (`w·p` inside `V_r`), along the unit vector `(dx, dy) / r` from the
+    /// obstacle's centre, with the law of the configuration they were
+    /// dropped with; computed as components: no angle, so no `atan2` and no
+    /// sine per obstacle. Outside `V_r` the components are
+    /// `p·(V_r²/s)²·(dx, dy)/V_r` with `s = r²`: one division and no square
+    /// root per obstacle (inside, where the push is constant, a root).
+    #[inline(never)]
+    pub fn force(&self, robot: Point, bearing: Angle) -> Force {
+        let law = &self.law;
+        let (rim, rim_sq) = (law.rim as u32, law.rim_sq as u32);
+        let per_radius_q16 = law.per_radius_q16 as u32;
+        // At most 24 terms below 2^24 each: the sum stays below 2^29, so a
         // plain add, and the slot order does not change it.
         let mut f = Force::ZERO;
         for v in self.obstacles.as_slice() {
@@ -298,25 +397,48 @@ impl Escape {
             if dx.unsigned_abs() >= reach || dy.unsigned_abs() >= reach {
                 continue;
             }
-            let r = hypot(dx, dy);
-            let d = r.max(cfg.radius_mm);
-            // (1/d²)·K_v in Q10 without 64-bit maths: ≤ 7,750 · 16,384 fits in i32.
-            let mag =
-                (((inverse_square_force(d) >> 4) * cfg.k_v) >> (FORCE_SHIFT - 4)).min(MAX_SCALED);
-            // Unsigned (mag ≥ 0, r ≥ 0): the AVR's signed division is the
-            // unsigned one wrapped in sign handling.
-            let r = r as u32;
-            let one = match (((mag as u32) << 12) + r / 2).checked_div(r) {
-                // mag/r in Q12, rounded (mag < 2^17), then times |dx|, |dy|
-                // ≤ r: the products stay below mag · 2^12 + r < 2^30.
-                Some(per_mm) => Force {
-                    x: (dx * per_mm as i32 + (1 << 11)) >> 12,
-                    y: (dy * per_mm as i32 + (1 << 11)) >> 12,
-                },
-                // Standing on the centre: straight away from the goal.
-                _ => Force::along(bearing.add(Angle::HALF), mag),
+            // |dx|, |dy| < reach ≤ 2^15 − 1: s < 2^31.
+            let (ax, ay) = (dx.unsigned_abs(), dy.unsigned_abs());
+            let s = ax * ax + ay * ay;
+            let one = if s >= rim_sq << law.shift {
+                // t = V_r²/s ≤ 1 in Q15, rounded. The push is p·t², and
+                // its component along x is p·t·(t·|dx|/V_r): the first
+                // factor ≈ p·(V_r/r)² ≤ 2^16, the second ≈ 2^15·(V_r/r)·
+                // (|dx|/r) ≤ 2^15 (1.6 % more at most, from rounding
+                // 2^16/V_r), so every product stays below 2^32 and neither
+                // loses the small pushes' bits.
+                let s = (s >> law.shift).max(1);
+                let t = ((rim_sq << 15) + s / 2) / s;
+                let pt = (rim * t + (1 << 14)) >> 15;
+                // Inlined: a call per component costs the Cortex-M4 as much
+                // as the arithmetic.
+                #[inline(always)]
+                fn along(d: i32, a: u32, t: u32, pt: u32, per_radius_q16: u32) -> i32 {
+                    let u = (t * a * per_radius_q16 + (1 << 15)) >> 16;
+                    let m = ((pt * u + (1 << 14)) >> 15) as i32;
+                    if d < 0 {
+                        -m
+                    } else {
+                        m
+                    }
+                }
+                Force {
+                    x: along(dx, ax, t, pt, per_radius_q16),
+                    y: along(dy, ay, t, pt, per_radius_q16),
+                }
+            } else {
+                let r = isqrt(s) as u32;
+                match ((rim << 12) + r / 2).checked_div(r) {
+                    // p/r in Q12, rounded (p ≤ 2^16), then times |dx|, |dy|
+                    // ≤ r: the products stay below p · 2^12 + r < 2^29.
+                    Some(per_mm) => Force {
+                        x: (dx * per_mm as i32 + (1 << 11)) >> 12,
+                        y: (dy * per_mm as i32 + (1 << 11)) >> 12,
+                    },
+                    _ => away_from_goal(bearing, rim),
+                }
             };
-            // |one| ≤ 2^17 and weight ≤ 255: the products fit in i32.
+            // |one| ≤ 2^16 and weight ≤ 255: the products fit in i32.
             let w = v.weight as i32;
             f = f.plus_bounded(Force {
                 x: one.x * w,
@@ -328,13 +450,12 @@ impl Escape {
 
     /// [`Escape::force`] for the planner: the answer is kept, and given
     /// again while the rover stands where it stood, facing the same goal
-    /// bearing, and no obstacle has been dropped (the same `cfg` every call:
-    /// a planner's configuration does not change).
-    pub(crate) fn force_kept(&mut self, cfg: &EscapeConfig, robot: Point, bearing: Angle) -> Force {
+    /// bearing, and no obstacle has been dropped.
+    pub(crate) fn force_kept(&mut self, robot: Point, bearing: Angle) -> Force {
         match self.kept_force {
             Some((at, b, f)) if at == robot && b == bearing => f,
             _ => {
-                let f = self.force(cfg, robot, bearing);
+                let f = self.force(robot, bearing);
                 self.kept_force = Some((robot, bearing, f));
                 f
             }
@@ -387,8 +508,8 @@ mod tests {
     #[test]
     fn the_strongest_full_set_of_virtual_obstacles_sums_without_overflow() {
         // The force sum is a plain add on the bound that every term is
-        // below 2^25 (a magnitude clamped below 2^17, times a weight up
-        // to 255) and there are at most VIRTUAL_CAPACITY of them. The
+        // at most 2^24 (a push clamped at MAX_PUSH = 2^16, times a weight
+        // up to 255) and there are at most VIRTUAL_CAPACITY of them. The
         // extreme: the largest K_v, every slot of weight 255 on one spot
         // right behind the rover, all pushing the same way.
         let cfg = EscapeConfig {
@@ -398,16 +519,17 @@ mod tests {
         let robot = Point::new(0, 0);
         let strongest = VirtualObstacle::new(&cfg, Point::new(-100, 0), u8::MAX);
         let mut one = Escape::new();
+        one.law = Law::of(&cfg);
         one.obstacles.push(strongest);
-        let mut full = Escape::new();
+        let mut full = one.clone();
         for _ in 0..VIRTUAL_CAPACITY {
             full.obstacles.push(strongest);
         }
-        let f1 = one.force(&cfg, robot, Angle::ZERO);
-        let f = full.force(&cfg, robot, Angle::ZERO);
+        let f1 = one.force(robot, Angle::ZERO);
+        let f = full.force(robot, Angle::ZERO);
         assert_eq!(
             f1.x,
-            MAX_SCALED * u8::MAX as i32,
+            MAX_PUSH * u8::MAX as i32,
             "clamped magnitude along +x"
         );
         assert_eq!(f.x as i64, VIRTUAL_CAPACITY as i64 * f1.x as i64);
@@ -482,8 +604,8 @@ mod tests {
                     proptest::prop_assert!(kept.obstacles().eq(plain.obstacles()));
                     // The kept force too (a stay repeats the question).
                     let bearing = Angle(4_000 * i as u16);
-                    let fresh = plain.force(&cfg, robot, bearing);
-                    proptest::prop_assert_eq!(kept.force_kept(&cfg, robot, bearing), fresh);
+                    let fresh = plain.force(robot, bearing);
+                    proptest::prop_assert_eq!(kept.force_kept(robot, bearing), fresh);
                 }
             }
         }
@@ -556,50 +678,112 @@ mod tests {
             ..EscapeConfig::default()
         };
         let mut e = Escape::new();
+        e.law = Law::of(&cfg);
         e.obstacles
             .push(VirtualObstacle::new(&cfg, Point::new(0, 0), 1));
-        // K_v = 1, rover 500 mm to the right: 1/0.5² = 4 units along +x.
-        assert_eq!(
-            e.force(&cfg, Point::new(500, 0), Angle::ZERO),
-            Force { x: 4_096, y: 0 }
-        );
-        // Inside the radius the distance counts as V_r = 150 mm: 44.4 units.
-        let f = e.force(&cfg, Point::new(0, 100), Angle::ZERO);
-        assert_eq!((f.x, f.y / 1024), (0, 44));
+        // K_v = 1, V_r = 0.15 m: p = 1/0.15² = 44.4 units (45,504 in Q10);
+        // at twice the radius an eighth of it, 5,688, along +x (2^16/V_r
+        // is rounded to 437: 0.02 % more).
+        let f = e.force(Point::new(300, 0), Angle::ZERO);
+        assert_eq!((f.x, f.y), (5_689, 0));
+        // Inside the radius the push is p.
+        let f = e.force(Point::new(0, 100), Angle::ZERO);
+        assert_eq!((f.x, f.y), (0, 45_504));
         // Weight 3 repels three times as hard.
         *e.obstacles.iter_mut().next().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 3);
         assert_eq!(
-            e.force(&cfg, Point::new(500, 0), Angle::ZERO),
-            Force { x: 3 * 4_096, y: 0 }
-        );
-        // Weight 1 reaches to where 1/d² = 1/32: √32 m = 5.657 m; just
-        // inside it pushes with 1/32 unit, at it not at all.
-        *e.obstacles.iter_mut().next().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
-        assert_eq!(e.obstacles().next().unwrap().reach_mm, 5_657);
-        let f = e.force(&cfg, Point::new(5_656, 0), Angle::ZERO);
-        assert_eq!(
-            f,
+            e.force(Point::new(-300, 0), Angle::ZERO),
             Force {
-                x: VIRTUAL_MIN_PUSH,
+                x: -3 * 5_689,
                 y: 0
             }
         );
-        assert_eq!(
-            e.force(&cfg, Point::new(0, -5_657), Angle::ZERO),
-            Force::ZERO
-        );
-        assert_eq!(
-            e.force(&cfg, Point::new(5_657, 1), Angle::ZERO),
-            Force::ZERO
-        );
+        // Weight 1 pushes with 1/32 unit at V_r·∛(45,504/32) = 1,686 mm;
+        // its reach is that rounded up to an eighth of the radius, 90/8 of
+        // it.
+        *e.obstacles.iter_mut().next().unwrap() = VirtualObstacle::new(&cfg, Point::new(0, 0), 1);
+        assert_eq!(e.obstacles().next().unwrap().reach_mm, 1_688);
+        let push = |x, y| e.force(Point::new(x, y), Angle::ZERO);
+        assert!(push(1_600, 0).x > VIRTUAL_MIN_PUSH);
+        assert!((1..=VIRTUAL_MIN_PUSH).contains(&push(1_687, 0).x));
+        assert_eq!(push(0, -1_688), Force::ZERO);
+        assert_eq!(push(1_688, 1), Force::ZERO);
         // Exactly on it: away from the goal.
-        let f = e.force(&cfg, Point::new(0, 0), Angle::ZERO);
+        let f = e.force(Point::new(0, 0), Angle::ZERO);
         assert!(f.x < -44 * 1024 && f.y == 0, "{f:?}");
         assert!(!EscapeConfig {
             window_steps: 0,
             ..cfg
         }
         .is_valid());
+    }
+
+    #[test]
+    fn reach_is_the_least_eighth_of_the_radius_past_the_smallest_push() {
+        for radius_mm in [10, 91, 150, 1_000, 2_000] {
+            for k_v in [1, FORCE_ONE / 10, FORCE_ONE, 16 * FORCE_ONE] {
+                let cfg = EscapeConfig {
+                    radius_mm,
+                    k_v,
+                    ..EscapeConfig::default()
+                };
+                let law = Law::of(&cfg);
+                for weight in 1..=u8::MAX {
+                    // By counting: the least h with (h/8)³·min ≥ w·p.
+                    let wp = law.rim as u64 * weight as u64;
+                    let h = (0u64..)
+                        .find(|h| h * h * h * VIRTUAL_MIN_PUSH as u64 >= wp * 512)
+                        .unwrap();
+                    let want = (radius_mm as u64 * h).div_ceil(8).min(32_767);
+                    assert_eq!(
+                        reach_mm(&law, weight) as u64,
+                        want,
+                        "{radius_mm} {k_v} {weight}"
+                    );
+                }
+            }
+        }
+    }
+
+    proptest::proptest! {
+        /// The fixed-point push against `w·p·(V_r/r)³` (`w·p` inside) in
+        /// f64, for every valid radius and `K_v`: within 1 % plus the
+        /// rounding of `2^16/V_r` (and 2 Q10 units for the smallest),
+        /// along `(dx, dy)`.
+        #[test]
+        fn the_push_is_the_inverse_cube_law(
+            radius_mm in 10u16..=2_000,
+            k_v in 1i32..=16 * FORCE_ONE,
+            weight in 1u8..=255,
+            dx in -8_000i16..=8_000,
+            dy in -8_000i16..=8_000,
+        ) {
+            let cfg = EscapeConfig { radius_mm, k_v, ..EscapeConfig::default() };
+            let mut e = Escape::new();
+            e.law = Law::of(&cfg);
+            e.obstacles.push(VirtualObstacle::new(&cfg, Point::new(0, 0), weight));
+            let f = e.force(Point::new(dx, dy), Angle::ZERO);
+            let law = Law::of(&cfg);
+            let (x, y) = (dx as f64, dy as f64);
+            let r = x.hypot(y);
+            let v_r = radius_mm as f64;
+            proptest::prop_assume!(r > 0.0);
+            let push = weight as f64 * law.rim as f64 * (v_r / r.max(v_r)).powi(3);
+            let reach = e.obstacles().next().unwrap().reach_mm as f64;
+            if x.abs() >= reach || y.abs() >= reach {
+                proptest::prop_assert_eq!(f, Force::ZERO);
+                proptest::prop_assert!(push < VIRTUAL_MIN_PUSH as f64 * 1.001 || r > 32_767.0);
+            } else {
+                let per = ((1u32 << 16) + radius_mm as u32 / 2) / radius_mm as u32;
+                let off = (per as f64 * v_r / 65_536.0 - 1.0).abs();
+                // Inside V_r the unit vector divides by an integer root.
+                let root = if r < v_r { push / r } else { 0.0 };
+                let tol = |want: f64| want.abs() * (0.01 + off) + 2.0 * weight as f64 + root;
+                let (wx, wy) = (push * x / r, push * y / r);
+                proptest::prop_assert!((f.x as f64 - wx).abs() <= tol(wx), "x {} want {}", f.x, wx);
+                proptest::prop_assert!((f.y as f64 - wy).abs() <= tol(wy), "y {} want {}", f.y, wy);
+            }
+        }
     }
 
     #[test]
@@ -619,9 +803,10 @@ mod tests {
         assert_eq!(v.weight as u16, e.dropped());
         assert!(within(v.centre, Point::new(1_000, 500), 6));
         assert!(e.dropped() >= 9);
-        // 19 mm away is a new one.
-        e.observe(&cfg, Point::new(1_020, 500), 1_000);
-        e.observe(&cfg, Point::new(1_020, 500), 1_000);
+        // Farther than the merge distance is a new one.
+        let beyond = Point::new(1_005 + VIRTUAL_MERGE_MM as i16, 500);
+        e.observe(&cfg, beyond, 1_000);
+        e.observe(&cfg, beyond, 1_000);
         assert_eq!(e.len(), 2);
     }
 
@@ -633,8 +818,9 @@ mod tests {
             ..EscapeConfig::default()
         };
         let mut e = Escape::new();
+        let apart = VIRTUAL_MERGE_MM as i16 + 4;
         for i in 0..(2 * (VIRTUAL_CAPACITY as i16 + 5)) {
-            e.observe(&cfg, Point::new(20 * i, 0), 1_000);
+            e.observe(&cfg, Point::new(apart * i, 0), 1_000);
         }
         assert!(e.dropped() as usize > VIRTUAL_CAPACITY);
         assert_eq!(e.len(), VIRTUAL_CAPACITY);

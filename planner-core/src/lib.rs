@@ -270,7 +270,7 @@ impl Planner {
         // midpoint and off-sensor forces.
         let mut f = forces::attractive(cfg, bearing)
             .plus(repulsive)
-            .plus(self.escape.force_kept(&cfg.escape, robot, bearing));
+            .plus(self.escape.force_kept(robot, bearing));
         if !near {
             let (_, ax, ay) = self.memory.away_from_midpoint_kept(robot, self.goal);
             let mid = match self.kept_midpoint {

@@ -51,10 +51,10 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
                 if escape.len() >= a as usize {
                     break;
                 }
-                let _ = escape.observe(&esc, Point::new(40 * (k / 12), 0), 5_000);
+                let _ = escape.observe(&esc, Point::new(50 * (k / 12), 0), 5_000);
             }
             assert_eq!(escape.len(), a as usize, "the drop sequence holds {a}");
-            let f = escape.force(&esc, Point::new(300, -200), Angle::ZERO);
+            let f = escape.force(Point::new(300, -200), Angle::ZERO);
             (f.x, f.y)
         }
         other => panic!("unknown bench line {other}"),

@@ -128,20 +128,20 @@ fn main() -> ! {
             report(name, deg as i32, 0, t);
         }
     }
-    // Virtual obstacles: a rover creeping 40 mm every twelve cycles is
+    // Virtual obstacles: a rover creeping 50 mm every twelve cycles is
     // stuck and drops one each time (see `escape`); the force is timed
     // 300 mm away as each is added, up to eight.
     let esc = EscapeConfig::default();
     let mut escape = Escape::new();
     let (mut held, mut k) = (0, 0i16);
     while held < 8 && k < 200 {
-        let _ = escape.observe(&esc, Point::new(40 * (k / 12), 0), 5_000);
+        let _ = escape.observe(&esc, Point::new(50 * (k / 12), 0), 5_000);
         k += 1;
         if escape.len() > held {
             held = escape.len();
             let probe = Point::new(300, -200);
             let t = timed(overhead, &mut || {
-                let f = escape.force(&esc, black_box(probe), black_box(Angle::ZERO));
+                let f = escape.force(black_box(probe), black_box(Angle::ZERO));
                 (f.x, f.y)
             });
             report("vo_force", held as i32, 0, t);
