@@ -52,7 +52,11 @@ use heapless::Deque;
 
 /// Most virtual obstacles kept.
 pub const VIRTUAL_CAPACITY: usize = 24;
-/// A drop nearer than this (mm) to a held virtual obstacle strengthens it.
+/// A drop nearer than this (mm) to a held virtual obstacle strengthens it,
+/// for the cost of one term in every later sum. 40 mm rather than 16: with
+/// 16 the STM32's worst replayed step went over issue 6's 3,000
+/// instructions, at outcomes within noise of these (docs/bench.md, "The
+/// inverse-cube push").
 pub const VIRTUAL_MERGE_MM: u16 = 40;
 /// A virtual obstacle whose push is below this (Q10) is skipped.
 pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
