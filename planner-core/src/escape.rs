@@ -167,8 +167,9 @@ impl VirtualObstacle {
 /// drop) rather than for every obstacle of every cycle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Law {
-    /// `V_r`, mm.
+    /// `V_r`, mm, and `K_v` (Q10): the configuration the law is of.
     radius_mm: u16,
+    k_v: i32,
     /// `p`: the push of one drop at the rim, `K_v / V_r²` in Q10 force
     /// units (`V_r` below 91 mm counts as 91 mm here, as in
     /// [`inverse_square_force`]), at most [`MAX_PUSH`].
@@ -180,6 +181,8 @@ struct Law {
     /// `2^16 / V_r`, rounded: a multiply instead of a division by `V_r`
     /// per component (0.1 % off at the default 150 mm, 1.5 % at 2 m).
     per_radius_q16: u16,
+    /// The reach of one drop (most drops are new obstacles).
+    reach_one: u16,
 }
 
 impl Law {
@@ -193,14 +196,23 @@ impl Law {
             rim_sq >>= 1;
             shift += 1;
         }
+        let rim = rim.clamp(0, MAX_PUSH) as u16;
         Law {
-            radius_mm: v_r as u16,
-            rim: rim.clamp(0, MAX_PUSH) as u16,
+            radius_mm: cfg.radius_mm,
+            k_v: cfg.k_v,
+            rim,
             rim_sq: rim_sq as u16,
             shift,
             // 6,554 at most (V_r ≥ 10 mm).
             per_radius_q16: (((1 << 16) + v_r / 2) / v_r) as u16,
+            reach_one: reach_search(v_r, rim, 1),
         }
+    }
+
+    /// Whether this is the law of `cfg` (a drop works it out again only
+    /// when not: two divisions and a search saved on every later drop).
+    fn is_of(&self, cfg: &EscapeConfig) -> bool {
+        self.radius_mm == cfg.radius_mm && self.k_v == cfg.k_v
     }
 }
 
@@ -220,9 +232,18 @@ fn away_from_goal(bearing: Angle, rim: u32) -> Force {
 /// halving), at most 32,767 mm (a push from farther is ignored: the world
 /// is ±32 m).
 fn reach_mm(law: &Law, weight: u8) -> u16 {
+    if weight == 1 {
+        law.reach_one
+    } else {
+        reach_search(law.radius_mm.max(1) as u32, law.rim, weight)
+    }
+}
+
+/// [`reach_mm`] for `V_r` = `v_r` mm and `p` = `rim`.
+fn reach_search(v_r: u32, rim: u16, weight: u8) -> u16 {
     // (h/8)³·32 ≥ w·p ⇔ h³ ≥ 16·w·p; w·p < 2^24, so both sides < 2^30.
     const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
-    let need = 16 * law.rim as u32 * weight as u32;
+    let need = 16 * rim as u32 * weight as u32;
     let (mut lo, mut hi) = (0u32, 1_024u32);
     while lo < hi {
         let h = (lo + hi) / 2;
@@ -232,7 +253,7 @@ fn reach_mm(law: &Law, weight: u8) -> u16 {
             lo = h + 1;
         }
     }
-    (law.radius_mm as u32 * lo).div_ceil(8).min(i16::MAX as u32) as u16
+    (v_r * lo).div_ceil(8).min(i16::MAX as u32) as u16
 }
 
 /// Progress monitor and virtual obstacles.
@@ -280,10 +301,12 @@ impl Escape {
             kept_force: None,
             law: Law {
                 radius_mm: 0,
+                k_v: 0,
                 rim: 0,
                 rim_sq: 0,
                 shift: 0,
                 per_radius_q16: 0,
+                reach_one: 0,
             },
         }
     }
@@ -359,7 +382,9 @@ impl Escape {
     /// Drop a virtual obstacle at `robot` (or strengthen the one held there).
     fn drop_at(&mut self, robot: Point, cfg: &EscapeConfig) {
         self.kept_force = None;
-        self.law = Law::of(cfg);
+        if !self.law.is_of(cfg) {
+            self.law = Law::of(cfg);
+        }
         let law = &self.law;
         let new = |centre, weight| VirtualObstacle {
             centre,
@@ -720,6 +745,30 @@ mod tests {
             ..cfg
         }
         .is_valid());
+    }
+
+    #[test]
+    fn a_drop_with_another_configuration_works_out_its_law() {
+        let stuck = |cfg: &EscapeConfig, e: &mut Escape| {
+            for _ in 0..cfg.window_steps {
+                e.observe(cfg, Point::new(0, 0), 1_000);
+            }
+        };
+        let a = EscapeConfig {
+            window_steps: 2,
+            ..EscapeConfig::default()
+        };
+        let b = EscapeConfig {
+            k_v: 3 * a.k_v,
+            radius_mm: 2 * a.radius_mm,
+            ..a
+        };
+        let mut e = Escape::new();
+        stuck(&a, &mut e);
+        assert_eq!(e.law, Law::of(&a));
+        stuck(&b, &mut e);
+        assert_eq!(e.law, Law::of(&b));
+        assert_ne!(Law::of(&a), Law::of(&b));
     }
 
     #[test]
