@@ -3,8 +3,9 @@
 //! Times the fixed-point primitives the step is built of (a 32-bit
 //! division and multiply, the square root, `hypot`, `atan2`, the sine,
 //! `1/d²`, the free-distance rule) and the virtual obstacles' force with
-//! 1 to 8 obstacles in reach, each on fixed inputs, and prints one line per
-//! call: `C name a b result_x result_y cycles`, then `END`. The figures are
+//! 1 to 24 obstacles in reach (the escape's capacity), each on fixed
+//! inputs, and prints one line per call: `C name a b result_x result_y
+//! cycles`, then `END`. The figures are
 //! what a call costs in place, with its operands passed through
 //! `black_box` (which matters for the cheapest ones, a multiply); the
 //! `nothing` lines time an empty span, the measurement's own residual. The
@@ -30,7 +31,7 @@ mod serial;
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::command::free_distance_mm;
-use planner_core::escape::{Escape, EscapeConfig};
+use planner_core::escape::{Escape, EscapeConfig, VIRTUAL_CAPACITY};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{Angle, Point, Reading};
 use serial::Serial;
@@ -130,16 +131,17 @@ fn main() -> ! {
     }
     // Virtual obstacles: a rover creeping 50 mm every twelve cycles is
     // stuck and drops one each time (see `escape`); the force is timed
-    // 300 mm away as each is added, up to eight.
+    // as each is added, up to the escape's capacity, from a point beside
+    // the middle of the row (all 24 in reach: the worst case).
     let esc = EscapeConfig::default();
     let mut escape = Escape::new();
     let (mut held, mut k) = (0, 0i16);
-    while held < 8 && k < 200 {
+    while held < VIRTUAL_CAPACITY && k < 400 {
         let _ = escape.observe(&esc, Point::new(50 * (k / 12), 0), 5_000);
         k += 1;
         if escape.len() > held {
             held = escape.len();
-            let probe = Point::new(300, -200);
+            let probe = Point::new(575, -200);
             let t = timed(overhead, &mut || {
                 let f = escape.force(black_box(probe), black_box(Angle::ZERO));
                 (f.x, f.y)
