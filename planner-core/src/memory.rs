@@ -66,28 +66,30 @@ pub struct Remembered {
 /// every remembered point in one cycle (computed once, not per point).
 #[derive(Clone, Copy, Debug)]
 struct Span {
-    x_lo: i32,
-    x_len: u32,
-    y_lo: i32,
-    y_len: u32,
+    x_lo: i16,
+    x_len: u16,
+    y_lo: i16,
+    y_len: u16,
 }
 
 impl Span {
     fn new(robot: Point, target: Point) -> Span {
         Span {
-            x_lo: robot.x.min(target.x) as i32,
-            x_len: robot.x.abs_diff(target.x) as u32,
-            y_lo: robot.y.min(target.y) as i32,
-            y_len: robot.y.abs_diff(target.y) as u32,
+            x_lo: robot.x.min(target.x),
+            x_len: robot.x.abs_diff(target.x),
+            y_lo: robot.y.min(target.y),
+            y_len: robot.y.abs_diff(target.y),
         }
     }
 
-    /// Whether `p` lies inside on x, on y. One unsigned compare per axis:
-    /// below `lo`, the difference wraps above the span.
+    /// Whether `p` lies inside on x, on y. One unsigned compare per axis
+    /// in 16 bits (half the AVR's work of 32): below `lo`, the difference
+    /// wraps above the span, since `lo + len` ≤ `i16::MAX` and a point is
+    /// ≥ `i16::MIN`, so `p − lo + 2^16` > `len`.
     fn axes(&self, p: Point) -> (bool, bool) {
         (
-            (p.x as i32 - self.x_lo) as u32 <= self.x_len,
-            (p.y as i32 - self.y_lo) as u32 <= self.y_len,
+            p.x.wrapping_sub(self.x_lo) as u16 <= self.x_len,
+            p.y.wrapping_sub(self.y_lo) as u16 <= self.y_len,
         )
     }
 
@@ -313,6 +315,35 @@ impl Memory {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_16_bit_span_test_is_the_plain_one() {
+        let edges = [
+            i16::MIN,
+            i16::MIN + 1,
+            -20_000,
+            -1,
+            0,
+            1,
+            7,
+            20_000,
+            i16::MAX - 1,
+            i16::MAX,
+        ];
+        for a in edges {
+            for b in edges {
+                let span = Span::new(Point::new(a, b), Point::new(b, a));
+                for p in edges
+                    .iter()
+                    .flat_map(|&x| [x, x.wrapping_add(3), x.wrapping_sub(3)])
+                {
+                    let (lo, hi) = (a.min(b) as i32, a.max(b) as i32);
+                    let inside = (lo..=hi).contains(&(p as i32));
+                    assert_eq!(span.axes(Point::new(p, p)), (inside, inside), "{a} {b} {p}");
+                }
+            }
+        }
+    }
 
     const TOL: Angle = Angle::from_deg(5);
 
