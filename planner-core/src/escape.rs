@@ -421,13 +421,14 @@ impl Escape {
         // plain add, and the slot order does not change it.
         let mut f = Force::ZERO;
         for v in self.obstacles.as_slice() {
-            let (dx, dy) = v.centre.to(robot);
-            let reach = v.reach_mm as u32;
-            if dx.unsigned_abs() >= reach || dy.unsigned_abs() >= reach {
+            // The reach test in 16 bits (`abs_diff` of two i16 is exact).
+            let (ax, ay) = (v.centre.x.abs_diff(robot.x), v.centre.y.abs_diff(robot.y));
+            if ax >= v.reach_mm || ay >= v.reach_mm {
                 continue;
             }
+            let (dx, dy) = v.centre.to(robot);
             // |dx|, |dy| < reach ≤ 2^15 − 1: s < 2^31.
-            let (ax, ay) = (dx.unsigned_abs(), dy.unsigned_abs());
+            let (ax, ay) = (ax as u32, ay as u32);
             let s = ax * ax + ay * ay;
             let one = if s >= rim_sq << law.shift {
                 // t = V_r²/s ≤ 1 in Q15, rounded. The push is p·t², and
