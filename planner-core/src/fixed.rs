@@ -547,11 +547,15 @@ mod tests {
             i16::MAX,
         ];
         for r_mm in [0u16, 1, 60, 150, 40_000, u16::MAX] {
-            for ax in edges {
-                for bx in edges {
-                    let (a, b) = (Point::new(ax, bx), Point::new(bx, ax));
-                    let d = (ax as i32 - bx as i32).abs();
-                    assert_eq!(box_within(a, b, r_mm), d < r_mm as i32, "{ax} {bx} {r_mm}");
+            for u in edges {
+                for v in edges {
+                    let near = (u as i32 - v as i32).abs() < r_mm as i32;
+                    // One axis apart at a time, the other equal.
+                    for c in [i16::MIN, 0, i16::MAX] {
+                        let along_x = box_within(Point::new(u, c), Point::new(v, c), r_mm);
+                        let along_y = box_within(Point::new(c, u), Point::new(c, v), r_mm);
+                        assert_eq!((along_x, along_y), (near, near), "{u} {v} {r_mm}");
+                    }
                 }
             }
         }
