@@ -165,7 +165,7 @@ impl VirtualObstacle {
 
 /// The push law's constants, worked out from the configuration at the
 /// first drop rather than for every obstacle of every cycle.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 struct Law {
     /// `V_r`, mm, and `K_v` (Q10): the configuration the law is of.
     radius_mm: u16,
@@ -186,6 +186,17 @@ struct Law {
 }
 
 impl Law {
+    /// No law yet (no drop): zero push, no reach.
+    const NONE: Law = Law {
+        radius_mm: 0,
+        k_v: 0,
+        rim: 0,
+        rim_sq: 0,
+        shift: 0,
+        per_radius_q16: 0,
+        reach_one: 0,
+    };
+
     fn of(cfg: &EscapeConfig) -> Law {
         let v_r = cfg.radius_mm.max(1) as u32;
         let rim =
@@ -299,15 +310,7 @@ impl Escape {
             no_revisit_at: None,
             obstacles: Ring::new(),
             kept_force: None,
-            law: Law {
-                radius_mm: 0,
-                k_v: 0,
-                rim: 0,
-                rim_sq: 0,
-                shift: 0,
-                per_radius_q16: 0,
-                reach_one: 0,
-            },
+            law: Law::NONE,
         }
     }
 

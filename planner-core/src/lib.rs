@@ -59,6 +59,7 @@ pub use sensors::{
     AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
 };
 
+use fixed::hypot;
 use forces::Motion;
 
 /// Beyond this angle from the rover's heading a force counts as "behind"
@@ -209,7 +210,7 @@ impl Planner {
             Some((at, d, b)) if at == robot => (d, b),
             _ => {
                 let (gx, gy) = robot.to(self.goal);
-                let d = robot.distance_mm(self.goal);
+                let d = hypot(gx, gy);
                 let b = Angle::atan2(gy, gx);
                 self.kept_goal = Some((robot, d, b));
                 (d, b)

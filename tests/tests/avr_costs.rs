@@ -5,10 +5,14 @@
 //! the README's account of where the AVR step's time goes:
 //! `cargo test --release -p rover-tests --test avr_costs -- --nocapture`.
 
+// The inputs the bench does not print, from the bench's own file.
+#[path = "../../firmware-avr/src/bench_inputs.rs"]
+mod bench_inputs;
+
 use planner_core::command::free_distance_mm;
 use planner_core::escape::{Escape, EscapeConfig};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
-use planner_core::{AdcProfile, Angle, ConfigBuilder, Point, Reading};
+use planner_core::{AdcProfile, Angle, ConfigBuilder, Reading};
 use rover_tests::avr::{costs_elf, Avr};
 use std::collections::BTreeMap;
 
@@ -17,13 +21,6 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
     let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
         .build()
         .unwrap();
-    let near = [
-        Reading::Range(300),
-        Reading::Range(180),
-        Reading::Clear,
-        Reading::Range(420),
-        Reading::TooClose,
-    ];
     match name {
         "nothing" => (a, 0),
         "div_u32" => ((a as u32 / b as u32) as i32, 0),
@@ -37,7 +34,7 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
             let readings = if name == "free_clear" {
                 [Reading::Clear; 5]
             } else {
-                near
+                bench_inputs::NEAR
             };
             let rel = Angle::from_deg(a as i16);
             (free_distance_mm(&cfg, &readings, rel) as i32, 0)
@@ -47,14 +44,14 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
             // obstacles held.
             let esc = EscapeConfig::default();
             let mut escape = Escape::new();
-            for k in 0..400i16 {
+            for k in 0..bench_inputs::CREEP_CYCLES {
                 if escape.len() >= a as usize {
                     break;
                 }
-                let _ = escape.observe(&esc, Point::new(50 * (k / 12), 0), 5_000);
+                bench_inputs::creep(&mut escape, &esc, k);
             }
             assert_eq!(escape.len(), a as usize, "the drop sequence holds {a}");
-            let f = escape.force(Point::new(575, -200), Angle::ZERO);
+            let f = escape.force(bench_inputs::VO_PROBE, Angle::ZERO);
             (f.x, f.y)
         }
         other => panic!("unknown bench line {other}"),

@@ -18,6 +18,8 @@
 
 #[path = "../bench.rs"]
 mod bench;
+#[path = "../bench_inputs.rs"]
+mod bench_inputs;
 #[path = "../board.rs"]
 #[allow(dead_code)]
 mod board;
@@ -33,7 +35,7 @@ use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::command::free_distance_mm;
 use planner_core::escape::{Escape, EscapeConfig, VIRTUAL_CAPACITY};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
-use planner_core::{Angle, Point, Reading};
+use planner_core::{Angle, Reading};
 use serial::Serial;
 use ufmt::uwriteln;
 
@@ -112,14 +114,7 @@ fn main() -> ! {
         report("inverse_square", d as i32, 0, t);
     }
     let clear = [Reading::Clear; 5];
-    let near = [
-        Reading::Range(300),
-        Reading::Range(180),
-        Reading::Clear,
-        Reading::Range(420),
-        Reading::TooClose,
-    ];
-    for (name, readings) in [("free_clear", clear), ("free_near", near)] {
+    for (name, readings) in [("free_clear", clear), ("free_near", bench_inputs::NEAR)] {
         for deg in [0i16, 25] {
             let rel = Angle::from_deg(deg);
             let t = timed(overhead, &mut || {
@@ -129,19 +124,17 @@ fn main() -> ! {
             report(name, deg as i32, 0, t);
         }
     }
-    // Virtual obstacles: a rover creeping 50 mm every twelve cycles is
-    // stuck and drops one each time (see `escape`); the force is timed
-    // as each is added, up to the escape's capacity, from a point beside
-    // the middle of the row (all 24 in reach: the worst case).
+    // Virtual obstacles: the force is timed as each is dropped, up to the
+    // escape's capacity (all 24 in reach: the worst case).
     let esc = EscapeConfig::default();
     let mut escape = Escape::new();
     let (mut held, mut k) = (0, 0i16);
-    while held < VIRTUAL_CAPACITY && k < 400 {
-        let _ = escape.observe(&esc, Point::new(50 * (k / 12), 0), 5_000);
+    while held < VIRTUAL_CAPACITY && k < bench_inputs::CREEP_CYCLES {
+        bench_inputs::creep(&mut escape, &esc, k);
         k += 1;
         if escape.len() > held {
             held = escape.len();
-            let probe = Point::new(575, -200);
+            let probe = bench_inputs::VO_PROBE;
             let t = timed(overhead, &mut || {
                 let f = escape.force(black_box(probe), black_box(Angle::ZERO));
                 (f.x, f.y)
