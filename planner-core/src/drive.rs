@@ -137,6 +137,11 @@ pub struct ExecutorConfig {
     pub hold_gain: i16,
     /// Slow down over this last part of a step, mm.
     pub slow_mm: u16,
+    /// Ticks to stand still after a turn, before the advance: the guard's
+    /// first reading of the way is then one the IR sensors took after the
+    /// turn (a GP2Y0A21 gives a new value every 38.3 ± 9.6 ms). The step
+    /// was planned from the view before the turn.
+    pub settle_ticks: u16,
 }
 
 impl Default for ExecutorConfig {
@@ -147,6 +152,8 @@ impl Default for ExecutorConfig {
             advance_duty: (220, 70),
             hold_gain: 12,
             slow_mm: 40,
+            // 1 ms ticks in both firmwares: the sensors' longest period.
+            settle_ticks: 48,
         }
     }
 }
@@ -163,13 +170,19 @@ pub enum Phase {
         heading: Angle,
         /// Step to take after the turn.
         step_mm: u16,
+        /// Has it spun yet (then it settles before the advance)?
+        spun: bool,
     },
-    /// Advancing along `heading` until `travelled_mm` reaches `end_mm`.
+    /// Advancing along `heading` until `travelled_mm` reaches `end_mm`,
+    /// after standing still for `settle` ticks.
     Advance {
         /// Heading to hold.
         heading: Angle,
         /// Odometry path length at which the step is complete.
         end_mm: u16,
+        /// Ticks still to stand still (after a turn, see
+        /// [`ExecutorConfig::settle_ticks`]).
+        settle: u16,
     },
 }
 
@@ -204,6 +217,7 @@ impl Executor {
         self.phase = Phase::Turn {
             heading: command.heading,
             step_mm: command.step_mm,
+            spun: false,
         };
     }
 
@@ -223,7 +237,11 @@ impl Executor {
         let c = self.cfg;
         match self.phase {
             Phase::Idle => Wheels::STOP,
-            Phase::Turn { heading, step_mm } => {
+            Phase::Turn {
+                heading,
+                step_mm,
+                spun,
+            } => {
                 let err = heading.sub(pose.heading);
                 if err.abs_signed() <= c.turn_tolerance.0 {
                     self.phase = if step_mm == 0 {
@@ -232,10 +250,16 @@ impl Executor {
                         Phase::Advance {
                             heading,
                             end_mm: travelled_mm.wrapping_add(step_mm),
+                            settle: if spun { c.settle_ticks } else { 0 },
                         }
                     };
                     return Wheels::STOP;
                 }
+                self.phase = Phase::Turn {
+                    heading,
+                    step_mm,
+                    spun: true,
+                };
                 // Duty proportional to the error (1 duty per 0.35°), bounded.
                 let duty = ((err.abs_signed() >> 6) as i16).clamp(c.turn_duty.1, c.turn_duty.0);
                 if err.signed() > 0 {
@@ -250,7 +274,19 @@ impl Executor {
                     }
                 }
             }
-            Phase::Advance { heading, end_mm } => {
+            Phase::Advance {
+                heading,
+                end_mm,
+                settle,
+            } => {
+                if settle > 0 {
+                    self.phase = Phase::Advance {
+                        heading,
+                        end_mm,
+                        settle: settle - 1,
+                    };
+                    return Wheels::STOP;
+                }
                 let remaining = end_mm.wrapping_sub(travelled_mm) as i16;
                 if remaining <= 0 || guard(remaining as u16) == Guard::Stop {
                     self.phase = Phase::Idle;
@@ -325,7 +361,13 @@ mod tests {
             heading: Angle::from_deg(90),
             ..origin()
         };
-        assert_eq!(e.tick(facing, 0, |_| Guard::Continue), Wheels::STOP);
+        // Aligned after a spin: it stands still while the sensors take a
+        // view of the new way (the guard is not asked), then advances.
+        let settle = ExecutorConfig::default().settle_ticks;
+        for _ in 0..=settle {
+            let w = e.tick(facing, 0, |_| panic!("guard asked while settling"));
+            assert_eq!(w, Wheels::STOP);
+        }
         let w = e.tick(facing, 0, |rem| {
             assert_eq!(rem, 100);
             Guard::Continue
@@ -336,6 +378,20 @@ mod tests {
         assert!(w.left < 220 && w.left >= 70);
         assert_eq!(e.tick(facing, 100, |_| Guard::Continue), Wheels::STOP);
         assert!(e.is_idle());
+    }
+
+    #[test]
+    fn without_a_spin_it_advances_at_once() {
+        let mut e = Executor::new(ExecutorConfig::default());
+        e.start(Command {
+            heading: Angle::ZERO,
+            step_mm: 100,
+        });
+        // Already facing the heading: nothing turned, nothing to settle.
+        assert_eq!(e.tick(origin(), 0, |_| Guard::Continue), Wheels::STOP);
+        assert!(matches!(e.phase(), Phase::Advance { .. }));
+        let w = e.tick(origin(), 0, |_| Guard::Continue);
+        assert_eq!((w.left, w.right), (220, 220));
     }
 
     #[test]

@@ -10,7 +10,10 @@
 //! Each cycle the caller passes the pose (from odometry) and the five raw
 //! ADC counts; the planner returns a [`Command`] (world heading, step length)
 //! and a [`Status`]. The executor turns in place, then advances, calling
-//! [`Planner::guard_raw`] with fresh counts during the advance.
+//! [`Planner::guard_raw`] with fresh counts before it drives and during the
+//! advance (after a turn it stands still for one sensor period first, so
+//! that the guard's first look is at the new way: the step was planned
+//! from the view before the turn).
 //!
 //! ```
 //! use planner_core::{AdcProfile, ConfigBuilder, Planner, Point, Pose, Angle, Status};
@@ -59,7 +62,7 @@ pub use sensors::{
     AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
 };
 
-use fixed::hypot;
+use fixed::{box_within, hypot};
 use forces::Motion;
 
 /// Beyond this angle from the rover's heading a force counts as "behind"
@@ -69,6 +72,15 @@ const BEHIND: Angle = Angle::from_deg(120);
 /// One revolution in [`Angle`] units (see the pocket rule in
 /// [`Planner::step_raw`]).
 const FULL_TURN: u32 = 65_536;
+
+/// A rover within this (mm, either axis) of where it was told to step from
+/// has not stepped (see the pocket rule in [`Planner::step_raw`]): odometry
+/// may drift a little while it turns on the spot; a step is at least the
+/// configured minimum (10 mm by default).
+const SPOT_MM: u16 = 5;
+
+/// No position (`stepped_from` when the last cycle commanded no step).
+const NOWHERE: Point = Point::new(i16::MIN, i16::MIN);
 
 /// The rover's pose from odometry.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -92,7 +104,11 @@ pub struct Planner {
     following: bool,
     turn_side: i8,
     spun: bool,
+    /// How far the rover has turned on the spot, and where it was told to
+    /// step from last cycle ([`NOWHERE`] if it was not): see the pocket rule
+    /// in [`Planner::step_raw`].
     turned_in_place: u32,
+    stepped_from: Point,
     paper_step_mm: u16,
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
@@ -119,6 +135,7 @@ impl Planner {
             turn_side: 0,
             spun: false,
             turned_in_place: 0,
+            stepped_from: NOWHERE,
             paper_step_mm: range,
             unreachable: false,
             last_points: heapless::Vec::new(),
@@ -140,6 +157,7 @@ impl Planner {
         self.turn_side = 0;
         self.spun = false;
         self.turned_in_place = 0;
+        self.stepped_from = NOWHERE;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
         self.last_points.clear();
@@ -351,22 +369,28 @@ impl Planner {
         // with something in sight (in a pocket every heading's force is
         // clamped to the sector edge, where the way is not free, round and
         // round; the escape's virtual obstacles cannot help a rover that
-        // never moves). Then advance where the rover faces, if free.
-        if step == 0 {
-            self.turned_in_place = self
-                .turned_in_place
-                .saturating_add(relative.abs_signed() as u32);
-            if self.turned_in_place >= FULL_TURN {
-                let ahead = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
-                if ahead > 0 {
-                    heading = pose.heading;
-                    step = ahead;
-                }
-            }
-        }
-        if step > 0 {
+        // never moves). Then advance where the rover faces, if free: without
+        // a turn, the guard sees what the planner saw.
+        //
+        // A step the executor's guard stopped before it began (after the
+        // turn the beams saw the way blocked) moved nothing: its turn counts
+        // as one on the spot, and the count goes on. The count restarts
+        // once a step has moved the rover.
+        let stopped = box_within(robot, self.stepped_from, SPOT_MM);
+        if self.stepped_from != NOWHERE && !stopped {
             self.turned_in_place = 0;
         }
+        self.turned_in_place = self
+            .turned_in_place
+            .saturating_add(relative.abs_signed() as u32);
+        if (step == 0 || stopped) && self.turned_in_place >= FULL_TURN {
+            let ahead = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
+            if ahead > 0 {
+                heading = pose.heading;
+                step = ahead;
+            }
+        }
+        self.stepped_from = if step > 0 { robot } else { NOWHERE };
         Output {
             command: Command {
                 heading,
@@ -575,6 +599,69 @@ mod tests {
             }
             turned += out.command.heading.sub(heading).abs_signed() as u32;
             heading = out.command.heading;
+        }
+        panic!("still turning on the spot after 30 cycles");
+    }
+
+    #[test]
+    fn steps_stopped_before_they_began_count_as_turns_on_the_spot() {
+        // A wall 300 mm ahead of the front sensor whichever way the rover
+        // faces: each cycle the force turns it 40° to the sector edge with a
+        // step along it, and the executor's guard, which sees the wall again
+        // after the turn, stops the step before it begins, so the rover only
+        // turns. After a full turn on the spot it advances where it faces
+        // (the guard then sees what the planner saw). When every commanded
+        // step reset the count, it turned round for ever, 40° and a 499 mm
+        // step a cycle: checked.
+        let mut p = planner(Point::new(3_000, 0));
+        let raw = [0, 0, count_for(&p, 300), 0, 0];
+        let mut heading = Angle::ZERO;
+        let mut turned = 0u32;
+        for _ in 0..20 {
+            let pose = Pose {
+                position: Point::new(0, 0),
+                heading,
+            };
+            let out = p.step_raw(pose, &raw).command;
+            assert!(out.step_mm > 0);
+            if out.heading == heading {
+                // The turns so far and the 40° this cycle would add.
+                let edge = Angle::from_deg(40).0 as u32;
+                assert!(turned + edge >= FULL_TURN, "before a full turn: {turned}");
+                return;
+            }
+            turned += out.heading.sub(heading).abs_signed() as u32;
+            heading = out.heading;
+        }
+        panic!("still turning on the spot after 20 cycles");
+    }
+
+    #[test]
+    fn a_step_that_moved_the_rover_restarts_the_count() {
+        // As above, but after five stopped steps (200°) one step moves the
+        // rover: at the new spot the count starts again, so the advance
+        // where it faces comes only after a full turn there (it came after
+        // four more cycles when the count carried over: checked).
+        let mut p = planner(Point::new(3_000, 0));
+        let raw = [0, 0, count_for(&p, 300), 0, 0];
+        let mut pose = Pose::default();
+        let mut cycles_here = 0;
+        for cycle in 0..30 {
+            if cycle == 5 {
+                pose.position = Point::new(0, 500);
+                cycles_here = 0;
+            }
+            let out = p.step_raw(pose, &raw).command;
+            assert!(out.step_mm > 0);
+            cycles_here += 1;
+            if out.heading == pose.heading {
+                assert!(
+                    cycle > 5 && cycles_here >= 9,
+                    "cycle {cycle}, {cycles_here} here"
+                );
+                return;
+            }
+            pose.heading = out.heading;
         }
         panic!("still turning on the spot after 30 cycles");
     }

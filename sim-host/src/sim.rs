@@ -1,6 +1,6 @@
 //! The simulated rover: a differential drive that executes the core's
-//! command as a turn in place then an advance, calls the core's guard
-//! during the advance, checks every motion exactly against the world, and
+//! command as a turn in place then an advance, asks the core's guard
+//! before every centimetre of the advance (the first included), checks every motion exactly against the world, and
 //! feeds the planner odometry (exact, or with seeded slip).
 
 use crate::geom::V2;
@@ -271,10 +271,19 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         if dturn != 0.0 {
             track.row(t, p, heading);
         }
-        // Advance in pieces of at most 1 cm, calling the guard each piece.
+        // Advance in pieces of at most 1 cm, asking the guard before each
+        // piece, the first one included: the firmware's executor
+        // (`planner_core::drive::Executor`) asks it on every tick of an
+        // advance before it drives, so the turn's new view of the way is
+        // checked before the rover moves (the step was planned from the
+        // readings before the turn).
         let step = out.step_m;
         let mut done = 0.0;
         while done < step - 1e-9 {
+            let raw = sensors.read(&world, p, heading, t);
+            if !planner.guard(&raw, step - done) {
+                break;
+            }
             let piece = (step - done).min(0.01);
             let mut true_piece = piece;
             if let Some((ds, _)) = cfg.slip {
@@ -293,10 +302,6 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             }
             if track.length > budget {
                 break 'run;
-            }
-            let raw = sensors.read(&world, p, heading, t);
-            if !planner.guard(&raw, step - done) {
-                break;
             }
         }
     }
