@@ -1,10 +1,12 @@
 //! The simulated rover: a differential drive that executes the core's
-//! command as a turn in place then an advance, asks the core's guard
-//! before every centimetre of the advance (the first included), checks every motion exactly against the world, and
-//! feeds the planner odometry (exact, or with seeded slip).
+//! command as the firmwares' executor does (a turn in place, a pause of one
+//! sensor period after it, then an advance that asks the core's guard
+//! before every centimetre, the first included), checks every motion
+//! exactly against the world, and feeds the planner odometry (exact, or
+//! with seeded slip).
 
 use crate::geom::V2;
-use crate::planners::{to_point, to_v2, PlannerKind, SimPlanner};
+use crate::planners::{to_point, to_rad, to_v2, PlannerKind, SimPlanner};
 use crate::scenario::Scenario;
 use crate::sensor::{SensorMode, VirtualSensors};
 use crate::world::World;
@@ -227,6 +229,11 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     let mut outcome = Outcome::Timeout;
     let mut steps = 0;
     let debug = std::env::var_os("SIM_DEBUG").is_some();
+    let executor = planner_core::drive::ExecutorConfig::default();
+    let (settle_after_rad, settle_s) = (
+        to_rad(executor.turn_tolerance),
+        executor.settle_ticks as f64 / 1000.0,
+    );
 
     'run: while steps < cfg.max_steps {
         steps += 1;
@@ -270,6 +277,12 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         oh = out.heading;
         if dturn != 0.0 {
             track.row(t, p, heading);
+        }
+        // After a turn the executor stands still for one sensor period
+        // before it advances, so that its guard first looks at the turned
+        // view (`ExecutorConfig::settle_ticks`, 1 ms ticks).
+        if out.step_m > 0.0 && dturn.abs() > settle_after_rad {
+            t += settle_s;
         }
         // Advance in pieces of at most 1 cm, asking the guard before each
         // piece, the first one included: the firmware's executor
