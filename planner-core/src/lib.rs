@@ -106,7 +106,10 @@ pub struct Planner {
     spun: bool,
     /// How far the rover has turned on the spot, and where it was told to
     /// step from last cycle ([`NOWHERE`] if it was not): see the pocket rule
-    /// in [`Planner::step_raw`].
+    /// in [`Planner::step_raw`]. Not derived from the kept goal's position,
+    /// which would do as "where it stood last cycle": that is a cache, and
+    /// forgetting it must change no command (`kept_answers_change_no_command`
+    /// fails when it is used so: checked).
     turned_in_place: u32,
     stepped_from: Point,
     paper_step_mm: u16,
