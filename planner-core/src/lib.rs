@@ -217,8 +217,17 @@ impl Planner {
     /// One planner cycle from raw ADC counts (the entry point every front
     /// end shares).
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        // Whether last cycle's step moved the rover, or the guard stopped it
+        // before it began (see the pocket rule below).
+        let stopped = box_within(pose.position, self.stepped_from, SPOT_MM);
+        let moved = self.stepped_from != NOWHERE && !stopped;
+        // Held on this spot for three full turns: the fold-back filter
+        // compares each sensor with the one that looked its way the cycle
+        // before (see `FoldBackFilter`).
+        let held = !moved && self.turned_in_place >= 3 * FULL_TURN;
         // Counts to readings and the fold-back filter, one pass.
         let fold_back = &mut self.fold_back;
+        fold_back.look(pose.heading, &self.config.sensor_angles, held);
         let readings = Planner::readings_then(&self.config, raw, |i, r| fold_back.filter(i, r));
         self.last_readings = readings;
         self.last_points.clear();
@@ -379,8 +388,7 @@ impl Planner {
         // turn the beams saw the way blocked) moved nothing: its turn counts
         // as one on the spot, and the count goes on. The count restarts
         // once a step has moved the rover.
-        let stopped = box_within(robot, self.stepped_from, SPOT_MM);
-        if self.stepped_from != NOWHERE && !stopped {
+        if moved {
             self.turned_in_place = 0;
         }
         self.turned_in_place = self
@@ -604,6 +612,42 @@ mod tests {
             heading = out.command.heading;
         }
         panic!("still turning on the spot after 30 cycles");
+    }
+
+    #[test]
+    fn held_on_a_spot_the_fold_back_filter_compares_sensors_by_way() {
+        // The −40° sensor reads a wall near every cycle, the others nothing,
+        // and the rover turns 40° left a cycle on one spot (its steps
+        // stopped before they begin). Then every sensor reads clear. Before
+        // three turns round, the −40° sensor's clear reading is compared
+        // with its own last one (near, of another way) and distrusted;
+        // after, with the 0° sensor's, which looked its way (clear), and
+        // trusted.
+        let after = |cycles: usize| {
+            let mut p = planner(Point::new(3_000, 0));
+            let (_, near) = p.config().calibration(0).unwrap().window();
+            let mut heading = Angle::ZERO;
+            for _ in 0..cycles {
+                let pose = Pose {
+                    position: Point::new(0, 0),
+                    heading,
+                };
+                let _ = p.step_raw(pose, &[near, 0, 0, 0, 0]);
+                heading = heading.add(Angle::from_deg(40));
+            }
+            let pose = Pose {
+                position: Point::new(0, 0),
+                heading,
+            };
+            let _ = p.step_raw(pose, &[0; 5]);
+            (p.turned_in_place, p.last_readings()[0])
+        };
+        let (turned, early) = after(3);
+        assert!(turned < 3 * FULL_TURN, "{turned}");
+        assert_eq!(early, Reading::TooClose);
+        let (turned, late) = after(40);
+        assert!(turned >= 3 * FULL_TURN, "{turned}");
+        assert_eq!(late, Reading::Clear);
     }
 
     #[test]
