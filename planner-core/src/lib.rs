@@ -219,8 +219,9 @@ impl Planner {
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
         // Whether last cycle's step moved the rover, or the guard stopped it
         // before it began (see the pocket rule below).
-        let stopped = box_within(pose.position, self.stepped_from, SPOT_MM);
-        let moved = self.stepped_from != NOWHERE && !stopped;
+        let stepped = self.stepped_from != NOWHERE;
+        let stopped = stepped && box_within(pose.position, self.stepped_from, SPOT_MM);
+        let moved = stepped && !stopped;
         // Held on this spot for three full turns: the fold-back filter
         // compares each sensor with the one that looked its way the cycle
         // before (see `FoldBackFilter`).
