@@ -367,6 +367,14 @@ impl Planner {
         if near {
             step = step.min(goal_mm);
         }
+        // Ours, optional (the escape's retreat, `escape` module docs): away
+        // from the goal, only as far as the virtual obstacles dropped since
+        // the last progress call for.
+        if let Some(limit) = self.escape.retreat_limit_mm(&cfg.escape) {
+            if heading.sub(bearing).abs_signed() > Angle::QUARTER.0 {
+                step = step.min(limit);
+            }
+        }
         step = at_least_min(step);
         // Ours: two turns on the spot in a row with nothing in sight is the
         // start of a livelock (turn to the force, see the obstacle, turn
@@ -480,6 +488,44 @@ mod tests {
         // Reach 900 mm less radius and clearance (140 mm).
         assert_eq!(out.command.step_mm, 760);
         assert_eq!(out.status, Status::Moving);
+    }
+
+    #[test]
+    fn a_step_away_from_the_goal_goes_only_as_far_as_the_drops_allow() {
+        // Held on one spot facing the goal, nothing in sight: after a
+        // window of cycles the escape drops a virtual obstacle there, whose
+        // push (4.4 units, more than the attraction's 2) points away from
+        // the goal. The rover turns round, then retreats `retreat_mm` plus
+        // `retreat_per_drop_mm` for the one drop (100 + 40), not the 760 mm
+        // the way is free for (the default: no retreat limit).
+        let run = |escape: EscapeConfig| {
+            let mut p = Planner::new(
+                ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+                    .escape(escape)
+                    .build()
+                    .unwrap(),
+                Point::new(3_000, 0),
+            );
+            let mut pose = at(0, 0, 0);
+            for _ in 0..40 {
+                let out = p.step_raw(pose, &[0; 5]);
+                if out.command.heading.sub(Angle::HALF).abs_signed() < Angle::from_deg(1).0 {
+                    if pose.heading == out.command.heading {
+                        return (p.escape().dropped(), out.command.step_mm);
+                    }
+                    assert_eq!(out.command.step_mm, 0, "turns round first");
+                    pose.heading = out.command.heading;
+                }
+            }
+            panic!("no retreat in 40 cycles");
+        };
+        let retreat = EscapeConfig {
+            retreat_mm: escape::RETREAT_MM,
+            retreat_per_drop_mm: escape::RETREAT_PER_DROP_MM,
+            ..EscapeConfig::default()
+        };
+        assert_eq!(run(retreat), (1, 140));
+        assert_eq!(run(EscapeConfig::default()), (1, 760));
     }
 
     #[test]
