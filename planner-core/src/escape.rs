@@ -46,10 +46,12 @@
 //! slides along it a little way back and tries the next gap, instead of
 //! running a whole sensor range (0.8 m) back across open ground and meeting
 //! the wall somewhere else; a deep pit (a dead end, a U) fills drop by drop
-//! and lets it go as far back as it must. Measured with [`RETREAT_MM`] and
-//! [`RETREAT_PER_DROP_MM`] (docs/bench.md, "The retreat"): shorter paths
-//! and more goals reached, but about twice the collisions (more cycles
-//! spent turning and stepping beside obstacles), so it is not the default.
+//! and lets it go as far back as it must (a shortened retreat step after a
+//! turn of more than 20° waits a cycle: the planner's retreat rule).
+//! Measured with [`RETREAT_MM`] and [`RETREAT_PER_DROP_MM`] (docs/bench.md,
+//! "The retreat"): shorter paths and more goals reached, no more
+//! collisions; not yet the default because the firmwares' replayed dead end
+//! then costs the STM32 3,036 instructions, over its 3,000 budget.
 //!
 //! Give-up: when `give_up_drops` virtual obstacles have been dropped, or
 //! `give_up_steps` cycles have passed, since the rover last came

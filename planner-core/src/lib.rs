@@ -69,6 +69,10 @@ use forces::Motion;
 /// (see the sector rule in [`Planner::step_raw`]).
 const BEHIND: Angle = Angle::from_deg(120);
 
+/// A retreat step the escape's limit shortens, after a turn of more than
+/// this, waits a cycle (see the retreat in [`Planner::step_raw`]).
+const RETREAT_TURN: Angle = Angle::from_deg(20);
+
 /// One revolution in [`Angle`] units (see the pocket rule in
 /// [`Planner::step_raw`]).
 const FULL_TURN: u32 = 65_536;
@@ -367,12 +371,19 @@ impl Planner {
         if near {
             step = step.min(goal_mm);
         }
-        // Ours, optional (the escape's retreat, `escape` module docs): away
-        // from the goal, only as far as the virtual obstacles dropped since
-        // the last progress call for.
+        // Ours (the escape's retreat, `escape` module docs): away from the
+        // goal, only as far as the virtual obstacles dropped since the last
+        // progress call for. A step the limit shortens, after a turn of more
+        // than `RETREAT_TURN`, waits a cycle: the rover turns and looks
+        // first, so that the short step does not go blind into a corner on
+        // the new flank (what the retreat's collisions were).
         if let Some(limit) = self.escape.retreat_limit_mm(&cfg.escape) {
-            if heading.sub(bearing).abs_signed() > Angle::QUARTER.0 {
-                step = step.min(limit);
+            if heading.sub(bearing).abs_signed() > Angle::QUARTER.0 && step > limit {
+                step = if relative.abs_signed() > RETREAT_TURN.0 {
+                    0
+                } else {
+                    limit
+                };
             }
         }
         step = at_least_min(step);
@@ -526,6 +537,35 @@ mod tests {
         };
         assert_eq!(run(retreat), (1, 140));
         assert_eq!(run(EscapeConfig::default()), (1, 760));
+    }
+
+    #[test]
+    fn a_shortened_retreat_after_a_turn_waits_a_cycle() {
+        // As above, with the retreat: a drop on the spot, the force points
+        // back (180°). Facing 150°, the retreat needs a 30° turn: the rover
+        // turns without a step; facing 170° (10°) it steps the limit.
+        let mut p = Planner::new(
+            ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+                .escape(EscapeConfig {
+                    retreat_mm: escape::RETREAT_MM,
+                    ..EscapeConfig::default()
+                })
+                .build()
+                .unwrap(),
+            Point::new(3_000, 0),
+        );
+        let mut cycles = 0;
+        while p.escape().dropped() == 0 {
+            p.step_raw(at(0, 0, 0), &[0; 5]);
+            cycles += 1;
+            assert!(cycles < 40, "no drop");
+        }
+        let out = p.step_raw(at(0, 0, 150), &[0; 5]);
+        assert_eq!(out.command.heading, Angle::HALF);
+        assert_eq!(out.command.step_mm, 0, "a 30° turn first");
+        let out = p.step_raw(at(0, 0, 170), &[0; 5]);
+        assert_eq!(out.command.heading, Angle::HALF);
+        assert_eq!(out.command.step_mm, 140, "a 10° turn and the limit");
     }
 
     #[test]
