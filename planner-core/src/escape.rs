@@ -38,7 +38,7 @@
 //! when full, the oldest is dropped (the newest describe the pit the rover
 //! is in now).
 //!
-//! Retreat (optional, off by default): a step away from the goal (a
+//! Retreat: a step away from the goal (a
 //! heading more than 90° off its bearing) is at most `retreat_mm` plus
 //! `retreat_per_drop_mm` for every virtual obstacle dropped since the rover
 //! last came nearer the goal. The droplet rises only as far as the level in
@@ -48,10 +48,9 @@
 //! the wall somewhere else; a deep pit (a dead end, a U) fills drop by drop
 //! and lets it go as far back as it must (a shortened retreat step after a
 //! turn of more than 20° waits a cycle: the planner's retreat rule).
-//! Measured with [`RETREAT_MM`] and [`RETREAT_PER_DROP_MM`] (docs/bench.md,
-//! "The retreat"): shorter paths and more goals reached, no more
-//! collisions; not yet the default because the firmwares' replayed dead end
-//! then costs the STM32 3,036 instructions, over its 3,000 budget.
+//! Measured with the defaults [`RETREAT_MM`] and [`RETREAT_PER_DROP_MM`]
+//! (docs/bench.md, "The retreat"): shorter paths, more goals reached, no
+//! more collisions than without it (`retreat_mm` 0).
 //!
 //! Give-up: when `give_up_drops` virtual obstacles have been dropped, or
 //! `give_up_steps` cycles have passed, since the rover last came
@@ -79,10 +78,10 @@ pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
 /// units, 32 times the attraction; the default is 4.4). It bounds the
 /// products of [`Escape::force`] below 2^32.
 pub const MAX_PUSH: i32 = u16::MAX as i32;
-/// The measured setting of [`EscapeConfig::retreat_mm`] (the simulator's
-/// `eapf-retreat` planner), mm.
+/// The default [`EscapeConfig::retreat_mm`], mm (measured: docs/bench.md,
+/// "The retreat").
 pub const RETREAT_MM: u16 = 100;
-/// The measured setting of [`EscapeConfig::retreat_per_drop_mm`], mm.
+/// The default [`EscapeConfig::retreat_per_drop_mm`], mm.
 pub const RETREAT_PER_DROP_MM: u16 = 40;
 /// Most breadcrumbs kept.
 pub const CRUMB_CAPACITY: usize = 16;
@@ -115,7 +114,7 @@ pub struct EscapeConfig {
     pub give_up_steps: u16,
     /// Longest step away from the goal while no virtual obstacle has been
     /// dropped since the last progress, mm (10 ..= 5000; 0: no retreat
-    /// limit, the default).
+    /// limit).
     pub retreat_mm: u16,
     /// How much longer such a step may be for each virtual obstacle
     /// dropped since the last progress, mm (0 ..= 5000).
@@ -135,7 +134,7 @@ impl Default for EscapeConfig {
             k_v: FORCE_ONE / 10,
             give_up_drops: 40,
             give_up_steps: 400,
-            retreat_mm: 0,
+            retreat_mm: RETREAT_MM,
             retreat_per_drop_mm: RETREAT_PER_DROP_MM,
         }
     }
@@ -214,6 +213,9 @@ struct Law {
     per_radius_q16: u16,
     /// The reach of one drop (most drops are new obstacles).
     reach_one: u16,
+    /// The same in eighths of `V_r` (the search's `h` for one drop), which
+    /// bounds the search for more drops.
+    h_one: u16,
 }
 
 impl Law {
@@ -226,6 +228,7 @@ impl Law {
         shift: 0,
         per_radius_q16: 0,
         reach_one: 0,
+        h_one: 0,
     };
 
     fn of(cfg: &EscapeConfig) -> Law {
@@ -239,6 +242,7 @@ impl Law {
             shift += 1;
         }
         let rim = rim.clamp(0, MAX_PUSH) as u16;
+        let h_one = eighths(rim, 1, 0, 1_024);
         Law {
             radius_mm: cfg.radius_mm,
             k_v: cfg.k_v,
@@ -247,7 +251,8 @@ impl Law {
             shift,
             // 6,554 at most (V_r ≥ 10 mm).
             per_radius_q16: (((1 << 16) + v_r / 2) / v_r) as u16,
-            reach_one: reach_search(v_r, rim, 1),
+            reach_one: reach_of(v_r, h_one),
+            h_one: h_one as u16,
         }
     }
 
@@ -275,18 +280,48 @@ fn away_from_goal(bearing: Angle, rim: u32) -> Force {
 /// is ±32 m).
 fn reach_mm(law: &Law, weight: u8) -> u16 {
     if weight == 1 {
-        law.reach_one
-    } else {
-        reach_search(law.radius_mm.max(1) as u32, law.rim, weight)
+        return law.reach_one;
     }
+    // More drops never reach less: `h₁` is a lower bound. And `k³ ≥ w`
+    // gives an upper one, `(k·h₁)³ ≥ k³·16·p ≥ 16·w·p` (1.3125³ > 2, with
+    // the floors' loss made up by the + 1): a merge into a held obstacle
+    // (most often its second drop) searches a few values, not 1,024.
+    let h = law.h_one as u32;
+    let v_r = law.radius_mm.max(1) as u32;
+    if weight == 2 {
+        // ∛2·h₁ = 1.26·h₁ within a step or two: walk to the least `h`
+        // instead of halving (the second drop is the common merge).
+        let need = 32 * law.rim as u32;
+        let mut e = (h + (h >> 2) + 1).min(1_024);
+        while e < 1_024 && e * e * e < need {
+            e += 1;
+        }
+        while e > 0 && (e - 1) * (e - 1) * (e - 1) >= need {
+            e -= 1;
+        }
+        return reach_of(v_r, e);
+    }
+    let hi = match weight {
+        3..=8 => 2 * h,
+        9..=27 => 3 * h,
+        28..=64 => 4 * h,
+        _ => 7 * h,
+    };
+    reach_of(v_r, eighths(law.rim, weight, h, hi))
 }
 
-/// [`reach_mm`] for `V_r` = `v_r` mm and `p` = `rim`.
-fn reach_search(v_r: u32, rim: u16, weight: u8) -> u16 {
+/// The least `h` ≤ 1,024 with `h³ ≥ 16·w·p` for `p` = `rim`, `w` =
+/// `weight`, searched by halving between `lo` (which must not be above it)
+/// and `hi` (1,024 if `hi` does not satisfy it).
+fn eighths(rim: u16, weight: u8, lo: u32, hi: u32) -> u32 {
     // (h/8)³·32 ≥ w·p ⇔ h³ ≥ 16·w·p; w·p < 2^24, so both sides < 2^30.
     const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
     let need = 16 * rim as u32 * weight as u32;
-    let (mut lo, mut hi) = (0u32, 1_024u32);
+    let mut hi = hi.min(1_024);
+    if hi * hi * hi < need {
+        hi = 1_024;
+    }
+    let mut lo = lo.min(hi);
     while lo < hi {
         let h = (lo + hi) / 2;
         if h * h * h >= need {
@@ -295,7 +330,12 @@ fn reach_search(v_r: u32, rim: u16, weight: u8) -> u16 {
             lo = h + 1;
         }
     }
-    (v_r * lo).div_ceil(8).min(i16::MAX as u32) as u16
+    lo
+}
+
+/// `h` eighths of `V_r` = `v_r` mm, rounded up, at most 32,767 mm.
+fn reach_of(v_r: u32, h: u32) -> u16 {
+    (v_r * h).div_ceil(8).min(i16::MAX as u32) as u16
 }
 
 /// Progress monitor and virtual obstacles.
@@ -559,7 +599,7 @@ impl Escape {
 
     /// The longest step away from the goal allowed now (see "Retreat" in
     /// the module docs), mm; `None` (no limit) when the retreat or the
-    /// escape is off (the default; plain EAPF).
+    /// escape is off (plain EAPF).
     pub fn retreat_limit_mm(&self, cfg: &EscapeConfig) -> Option<u16> {
         if !cfg.enabled || cfg.retreat_mm == 0 {
             return None;
@@ -749,6 +789,26 @@ mod tests {
     }
 
     #[test]
+    fn the_bounded_reach_search_is_the_plain_one() {
+        // Every weight, pushes across the whole range: the bounds from one
+        // drop's `h` change no reach.
+        for rim in (0..=u16::MAX).step_by(251).chain([1, 2, 3, 7, u16::MAX]) {
+            let h_one = eighths(rim, 1, 0, 1_024);
+            let law = Law {
+                rim,
+                radius_mm: 150,
+                h_one: h_one as u16,
+                reach_one: reach_of(150, h_one),
+                ..Law::NONE
+            };
+            for weight in 1..=u8::MAX {
+                let plain = reach_of(150, eighths(rim, weight, 0, 1_024));
+                assert_eq!(reach_mm(&law, weight), plain, "p={rim} w={weight}");
+            }
+        }
+    }
+
+    #[test]
     fn the_retreat_grows_with_the_drops_since_progress() {
         let cfg = EscapeConfig {
             window_steps: 2,
@@ -767,15 +827,19 @@ mod tests {
         // 200 mm nearer than ever: back to the shortest retreat.
         e.observe(&cfg, p, 2_800);
         assert_eq!(e.retreat_limit_mm(&cfg), Some(100));
-        // Plain EAPF (no escape) and the default (no retreat) have no
-        // limit; a huge one saturates.
+        // Plain EAPF (no escape) and `retreat_mm` 0 have no limit; a huge
+        // one saturates.
         let off = EscapeConfig {
             enabled: false,
             ..cfg
         };
         assert_eq!(e.retreat_limit_mm(&off), None);
-        assert_eq!(e.retreat_limit_mm(&EscapeConfig::default()), None);
-        assert!(EscapeConfig::default().is_valid());
+        let none = EscapeConfig {
+            retreat_mm: 0,
+            ..cfg
+        };
+        assert_eq!(e.retreat_limit_mm(&none), None);
+        assert!(none.is_valid() && EscapeConfig::default().is_valid());
         let huge = EscapeConfig {
             retreat_mm: 5_000,
             retreat_per_drop_mm: 5_000,

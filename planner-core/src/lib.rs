@@ -476,6 +476,22 @@ mod tests {
         )
     }
 
+    /// The default planner less the escape's retreat limit (for the
+    /// pocket rule's tests, which count the steps it commands).
+    fn planner_without_retreat(goal: Point) -> Planner {
+        let escape = EscapeConfig {
+            retreat_mm: 0,
+            ..EscapeConfig::default()
+        };
+        Planner::new(
+            ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+                .escape(escape)
+                .build()
+                .unwrap(),
+            goal,
+        )
+    }
+
     /// The front sensor's first count that reads `mm` or nearer.
     fn count_for(p: &Planner, mm: u16) -> u16 {
         let cal = p.config().calibration(2).unwrap();
@@ -508,7 +524,7 @@ mod tests {
         // push (4.4 units, more than the attraction's 2) points away from
         // the goal. The rover turns round, then retreats `retreat_mm` plus
         // `retreat_per_drop_mm` for the one drop (100 + 40), not the 760 mm
-        // the way is free for (the default: no retreat limit).
+        // the way is free for (without the retreat limit).
         let run = |escape: EscapeConfig| {
             let mut p = Planner::new(
                 ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
@@ -530,13 +546,12 @@ mod tests {
             }
             panic!("no retreat in 40 cycles");
         };
-        let retreat = EscapeConfig {
-            retreat_mm: escape::RETREAT_MM,
-            retreat_per_drop_mm: escape::RETREAT_PER_DROP_MM,
+        assert_eq!(run(EscapeConfig::default()), (1, 140));
+        let without = EscapeConfig {
+            retreat_mm: 0,
             ..EscapeConfig::default()
         };
-        assert_eq!(run(retreat), (1, 140));
-        assert_eq!(run(EscapeConfig::default()), (1, 760));
+        assert_eq!(run(without), (1, 760));
     }
 
     #[test]
@@ -544,16 +559,7 @@ mod tests {
         // As above, with the retreat: a drop on the spot, the force points
         // back (180°). Facing 150°, the retreat needs a 30° turn: the rover
         // turns without a step; facing 170° (10°) it steps the limit.
-        let mut p = Planner::new(
-            ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-                .escape(EscapeConfig {
-                    retreat_mm: escape::RETREAT_MM,
-                    ..EscapeConfig::default()
-                })
-                .build()
-                .unwrap(),
-            Point::new(3_000, 0),
-        );
+        let mut p = planner(Point::new(3_000, 0));
         let mut cycles = 0;
         while p.escape().dropped() == 0 {
             p.step_raw(at(0, 0, 0), &[0; 5]);
@@ -746,8 +752,9 @@ mod tests {
         // turns. After a full turn on the spot it advances where it faces
         // (the guard then sees what the planner saw). When every commanded
         // step reset the count, it turned round for ever, 40° and a 499 mm
-        // step a cycle: checked.
-        let mut p = planner(Point::new(3_000, 0));
+        // step a cycle: checked. Without the retreat limit, whose turn-first
+        // cycles command no step.
+        let mut p = planner_without_retreat(Point::new(3_000, 0));
         let raw = [0, 0, count_for(&p, 300), 0, 0];
         let mut heading = Angle::ZERO;
         let mut turned = 0u32;
@@ -775,8 +782,9 @@ mod tests {
         // As above, but after five stopped steps (200°) one step moves the
         // rover: at the new spot the count starts again, so the advance
         // where it faces comes only after a full turn there (it came after
-        // four more cycles when the count carried over: checked).
-        let mut p = planner(Point::new(3_000, 0));
+        // four more cycles when the count carried over: checked). Without
+        // the retreat limit, as above.
+        let mut p = planner_without_retreat(Point::new(3_000, 0));
         let raw = [0, 0, count_for(&p, 300), 0, 0];
         let mut pose = Pose::default();
         let mut cycles_here = 0;

@@ -5,7 +5,6 @@
 use crate::geom::V2;
 use crate::scenario::Scenario;
 use planner_core::apf::{ApfConfig, ApfPlanner};
-use planner_core::escape;
 use planner_core::fixed::Point;
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Pose, RawCounts, Status,
@@ -17,9 +16,6 @@ use planner_core::{
 pub enum PlannerKind {
     /// The product: EAPF plus virtual-obstacle escape.
     Eapf,
-    /// The product with the escape's optional retreat limit
-    /// (`planner_core::escape` docs, "Retreat").
-    EapfRetreat,
     /// EAPF as the paper describes it, without the escape.
     EapfPlain,
     /// Classical APF (Khatib), the baseline.
@@ -41,7 +37,6 @@ impl PlannerKind {
     pub fn name(self) -> &'static str {
         match self {
             PlannerKind::Eapf => "eapf",
-            PlannerKind::EapfRetreat => "eapf-retreat",
             PlannerKind::EapfPlain => "eapf-plain",
             PlannerKind::Apf => "apf",
             PlannerKind::Liquid => "liquid",
@@ -86,18 +81,13 @@ pub fn to_rad(a: Angle) -> f64 {
 /// active ones, virtual obstacles (centre, radius), virtual obstacles dropped.
 pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
 
-/// The escape each sensing planner runs with: on for `eapf`, on with the
-/// measured retreat limit for `eapf-retreat`, off otherwise.
+/// The escape each sensing planner runs with: on (the defaults, the
+/// retreat limit included) for `eapf`, off otherwise.
 fn escape_config(kind: PlannerKind) -> EscapeConfig {
-    let mut escape = EscapeConfig {
-        enabled: matches!(kind, PlannerKind::Eapf | PlannerKind::EapfRetreat),
+    EscapeConfig {
+        enabled: kind == PlannerKind::Eapf,
         ..EscapeConfig::default()
-    };
-    if kind == PlannerKind::EapfRetreat {
-        escape.retreat_mm = escape::RETREAT_MM;
-        escape.retreat_per_drop_mm = escape::RETREAT_PER_DROP_MM;
     }
-    escape
 }
 
 /// The core planner behind a [`SimPlanner`].
@@ -211,16 +201,15 @@ impl SimPlanner {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use planner_core::escape;
 
     #[test]
     fn each_sensing_planner_gets_its_escape() {
         let eapf = escape_config(PlannerKind::Eapf);
-        assert!(eapf.enabled && eapf.retreat_mm == 0);
+        assert!(eapf.enabled && eapf.is_valid());
         assert_eq!(eapf, EscapeConfig::default());
-        let retreat = escape_config(PlannerKind::EapfRetreat);
-        assert!(retreat.enabled && retreat.is_valid());
         assert_eq!(
-            (retreat.retreat_mm, retreat.retreat_per_drop_mm),
+            (eapf.retreat_mm, eapf.retreat_per_drop_mm),
             (escape::RETREAT_MM, escape::RETREAT_PER_DROP_MM)
         );
         assert!(!escape_config(PlannerKind::EapfPlain).enabled);
