@@ -211,10 +211,8 @@ struct Law {
     /// `2^16 / V_r`, rounded: a multiply instead of a division by `V_r`
     /// per component (0.1 % off at the default 150 mm, 1.5 % at 2 m).
     per_radius_q16: u16,
-    /// The reach of one drop (most drops are new obstacles).
-    reach_one: u16,
-    /// The same in eighths of `V_r` (the search's `h` for one drop), which
-    /// bounds the search for more drops.
+    /// The reach of one drop in eighths of `V_r` (the search's `h`; most
+    /// drops are new obstacles), which also bounds the search for more.
     h_one: u16,
 }
 
@@ -227,7 +225,6 @@ impl Law {
         rim_sq: 0,
         shift: 0,
         per_radius_q16: 0,
-        reach_one: 0,
         h_one: 0,
     };
 
@@ -251,7 +248,6 @@ impl Law {
             shift,
             // 6,554 at most (V_r ≥ 10 mm).
             per_radius_q16: (((1 << 16) + v_r / 2) / v_r) as u16,
-            reach_one: reach_of(v_r, h_one),
             h_one: h_one as u16,
         }
     }
@@ -279,19 +275,19 @@ fn away_from_goal(bearing: Angle, rim: u32) -> Force {
 /// halving), at most 32,767 mm (a push from farther is ignored: the world
 /// is ±32 m).
 fn reach_mm(law: &Law, weight: u8) -> u16 {
+    let h = law.h_one as u32;
+    let v_r = law.radius_mm.max(1) as u32;
     if weight == 1 {
-        return law.reach_one;
+        return reach_of(v_r, h);
     }
     // More drops never reach less: `h₁` is a lower bound. And `k³ ≥ w`
     // gives an upper one, `(k·h₁)³ ≥ k³·16·p ≥ 16·w·p` (1.3125³ > 2, with
     // the floors' loss made up by the + 1): a merge into a held obstacle
     // (most often its second drop) searches a few values, not 1,024.
-    let h = law.h_one as u32;
-    let v_r = law.radius_mm.max(1) as u32;
     if weight == 2 {
         // ∛2·h₁ = 1.26·h₁ within a step or two: walk to the least `h`
         // instead of halving (the second drop is the common merge).
-        let need = 32 * law.rim as u32;
+        let need = need(law.rim, weight);
         let mut e = (h + (h >> 2) + 1).min(1_024);
         while e < 1_024 && e * e * e < need {
             e += 1;
@@ -314,9 +310,7 @@ fn reach_mm(law: &Law, weight: u8) -> u16 {
 /// `weight`, searched by halving between `lo` (which must not be above it)
 /// and `hi` (1,024 if `hi` does not satisfy it).
 fn eighths(rim: u16, weight: u8, lo: u32, hi: u32) -> u32 {
-    // (h/8)³·32 ≥ w·p ⇔ h³ ≥ 16·w·p; w·p < 2^24, so both sides < 2^30.
-    const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
-    let need = 16 * rim as u32 * weight as u32;
+    let need = need(rim, weight);
     let mut hi = hi.min(1_024);
     if hi * hi * hi < need {
         hi = 1_024;
@@ -331,6 +325,13 @@ fn eighths(rim: u16, weight: u8, lo: u32, hi: u32) -> u32 {
         }
     }
     lo
+}
+
+/// `16·w·p`, the least `h³` a reach of `h` eighths of `V_r` needs:
+/// `(h/8)³·32 ≥ w·p` ⇔ `h³ ≥ 16·w·p`; `w·p < 2^24`, so both sides < 2^30.
+fn need(rim: u16, weight: u8) -> u32 {
+    const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
+    16 * rim as u32 * weight as u32
 }
 
 /// `h` eighths of `V_r` = `v_r` mm, rounded up, at most 32,767 mm.
@@ -798,7 +799,6 @@ mod tests {
                 rim,
                 radius_mm: 150,
                 h_one: h_one as u16,
-                reach_one: reach_of(150, h_one),
                 ..Law::NONE
             };
             for weight in 1..=u8::MAX {

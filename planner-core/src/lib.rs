@@ -377,13 +377,15 @@ impl Planner {
         // than `RETREAT_TURN`, waits a cycle: the rover turns and looks
         // first, so that the short step does not go blind into a corner on
         // the new flank (what the retreat's collisions were).
-        if let Some(limit) = self.escape.retreat_limit_mm(&cfg.escape) {
-            if heading.sub(bearing).abs_signed() > Angle::QUARTER.0 && step > limit {
-                step = if relative.abs_signed() > RETREAT_TURN.0 {
-                    0
-                } else {
-                    limit
-                };
+        if heading.sub(bearing).abs_signed() > Angle::QUARTER.0 {
+            if let Some(limit) = self.escape.retreat_limit_mm(&cfg.escape) {
+                if step > limit {
+                    step = if relative.abs_signed() > RETREAT_TURN.0 {
+                        0
+                    } else {
+                        limit
+                    };
+                }
             }
         }
         step = at_least_min(step);
@@ -468,8 +470,14 @@ mod tests {
     use super::*;
 
     fn planner(goal: Point) -> Planner {
+        planner_with(EscapeConfig::default(), goal)
+    }
+
+    /// The default planner with the escape `escape`.
+    fn planner_with(escape: EscapeConfig, goal: Point) -> Planner {
         Planner::new(
             ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+                .escape(escape)
                 .build()
                 .unwrap(),
             goal,
@@ -483,13 +491,7 @@ mod tests {
             retreat_mm: 0,
             ..EscapeConfig::default()
         };
-        Planner::new(
-            ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-                .escape(escape)
-                .build()
-                .unwrap(),
-            goal,
-        )
+        planner_with(escape, goal)
     }
 
     /// The front sensor's first count that reads `mm` or nearer.
@@ -526,13 +528,7 @@ mod tests {
         // `retreat_per_drop_mm` for the one drop (100 + 40), not the 760 mm
         // the way is free for (without the retreat limit).
         let run = |escape: EscapeConfig| {
-            let mut p = Planner::new(
-                ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-                    .escape(escape)
-                    .build()
-                    .unwrap(),
-                Point::new(3_000, 0),
-            );
+            let mut p = planner_with(escape, Point::new(3_000, 0));
             let mut pose = at(0, 0, 0);
             for _ in 0..40 {
                 let out = p.step_raw(pose, &[0; 5]);
