@@ -7,6 +7,7 @@
 //! pin voltages, pin levels, UART, exact cycle counts.
 
 pub mod avr;
+pub mod profile;
 pub mod stm32;
 
 use planner_core::{AdcProfile, ConfigBuilder, Output, Planner, Point, Pose, RawCounts};

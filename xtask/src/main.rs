@@ -1,6 +1,7 @@
 //! Project tasks: `cargo xtask ci` runs every check the project has (the
 //! README's test command); `cargo xtask avr-report` and `cargo xtask
-//! stm32-report` print the firmware figures.
+//! stm32-report` print the firmware figures, `cargo xtask avr-profile` where
+//! the AVR step spends its cycles.
 //!
 //! `ci` installs what it needs on a fresh Debian machine of the project's
 //! kind: rustup targets and components always, Debian packages when it runs
@@ -268,14 +269,16 @@ fn main() {
         "cross" => cross_builds(),
         "avr-report" => report("avr-report"),
         "stm32-report" => report("stm32-report"),
+        "avr-profile" => report("avr-profile"),
         _ => {
-            eprintln!("usage: cargo xtask <ci|cross|avr-report|stm32-report>");
+            eprintln!("usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile>");
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
+            eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
             exit(2);
         }
     }

@@ -1,0 +1,50 @@
+//! `cargo xtask avr-profile`: where the ATmega328P firmware's planner step
+//! spends its cycles, over the standard traces (those of `cargo xtask
+//! avr-report`); see [`rover_tests::profile`].
+
+use planner_core::AdcProfile;
+use rover_tests::avr::firmware_elf;
+use rover_tests::profile::profile;
+use rover_tests::standard_traces;
+
+fn main() {
+    let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
+    let p = profile(&firmware_elf(), &traces);
+    let steps = p.steps.max(1);
+    println!(
+        "avr profile: {} steps, {} cycles per step (the firmware timed {} per step)",
+        p.steps,
+        p.cycles / steps,
+        p.timed / steps
+    );
+    print_table(
+        "by function (where the instruction is)",
+        &p.by_function,
+        p.cycles,
+        steps,
+    );
+    print_table(
+        "by what the step calls (callees included)",
+        &p.by_callee,
+        p.cycles,
+        steps,
+    );
+    let (worst, w) = &p.worst;
+    print_table(
+        &format!("the worst step ({worst} cycles), by what it calls"),
+        w,
+        *worst,
+        1,
+    );
+}
+
+fn print_table(title: &str, v: &[(String, u64)], total: u64, steps: u64) {
+    println!("\n{title}:");
+    for (name, c) in v.iter().take(25) {
+        println!(
+            "{:>7}/step {:>5.1}%  {name}",
+            c / steps,
+            *c as f64 * 100.0 / total.max(1) as f64
+        );
+    }
+}

@@ -1,0 +1,366 @@
+//! Where the ATmega328P firmware's planner step spends its cycles
+//! (`cargo xtask avr-profile`).
+//!
+//! Replays traces through the firmware in simavr one instruction at a
+//! time and charges each instruction's cycles to its address while a
+//! planner step runs (from the entry of `timed_step` until it returns),
+//! and to the function the step's own code called it under (a shadow call
+//! stack kept from the `call`/`rcall`/`icall` and `ret` instructions).
+//! Functions are named from the ELF's symbol table: the debug line tables
+//! of the LTO-built AVR image name the wrong files, so a profile by source
+//! line is not to be had; mark a function `#[inline(never)]` to see it.
+//! avr-tester hides simavr's CPU state (the program counter), so this
+//! drives simavr through `simavr-ffi` itself.
+
+use crate::avr::F_CPU;
+use crate::Trace;
+use simavr_ffi as ffi;
+use std::collections::{HashMap, VecDeque};
+use std::ffi::CString;
+use std::path::Path;
+use std::process::Command;
+
+/// Bytes the firmware sent on USART0.
+unsafe extern "C" fn on_output(_: *mut ffi::avr_irq_t, value: u32, param: *mut std::ffi::c_void) {
+    let rx = unsafe { &mut *(param as *mut VecDeque<u8>) };
+    rx.push_back(value as u8);
+}
+
+fn uart_ioctl(kind: u8) -> u32 {
+    u32::from_be_bytes([b'u', b'a', kind, b'0'])
+}
+
+struct Sim {
+    avr: *mut ffi::avr_t,
+    /// Boxed: simavr's output hook holds its address while `Sim` moves.
+    #[allow(clippy::box_collection)]
+    rx: Box<VecDeque<u8>>,
+    input: *mut ffi::avr_irq_t,
+    /// Cycles per instruction address while a step runs.
+    hist: HashMap<u32, u64>,
+    step_entry: u32,
+    /// Cycles by the entry address of the function the step's own code
+    /// called (0: the step's own instructions): an instruction of a called
+    /// function is charged to the outermost call it runs under.
+    sites: HashMap<u32, u64>,
+    /// Return addresses of the calls made inside the step, and where the
+    /// outermost one went.
+    shadow: Vec<u32>,
+    outer_callee: u32,
+    /// This step's cycles by outermost callee (0: the step's own code),
+    /// and the worst step's.
+    this_step: HashMap<u32, u64>,
+    worst_step: (u64, HashMap<u32, u64>),
+    /// Stack pointer at the step's entry, while one runs.
+    in_step: Option<u16>,
+    steps: u64,
+}
+
+impl Sim {
+    fn new(elf: &std::path::Path, step_entry: u32) -> Sim {
+        let mcu = CString::new("atmega328p").unwrap();
+        let path = CString::new(elf.to_str().unwrap()).unwrap();
+        unsafe {
+            let avr = ffi::avr_make_mcu_by_name(mcu.as_ptr());
+            assert!(!avr.is_null(), "simavr knows the atmega328p");
+            ffi::avr_init(avr);
+            let fw: *mut ffi::elf_firmware_t = Box::into_raw(Box::new(std::mem::zeroed()));
+            assert_eq!(ffi::elf_read_firmware(path.as_ptr(), fw), 0, "read {elf:?}");
+            (*fw).frequency = F_CPU;
+            ffi::avr_load_firmware(avr, fw);
+            (*avr).frequency = F_CPU;
+            let mut flags: u32 = 0;
+            ffi::avr_ioctl(avr, uart_ioctl(b'g'), &mut flags as *mut u32 as *mut _);
+            flags &= !ffi::AVR_UART_FLAG_STDIO;
+            ffi::avr_ioctl(avr, uart_ioctl(b's'), &mut flags as *mut u32 as *mut _);
+            let mut rx = Box::new(VecDeque::new());
+            let out = ffi::avr_io_getirq(avr, uart_ioctl(b'r'), ffi::UART_IRQ_OUTPUT as i32);
+            ffi::avr_irq_register_notify(
+                out,
+                Some(on_output),
+                &mut *rx as *mut VecDeque<u8> as *mut _,
+            );
+            let input = ffi::avr_io_getirq(avr, uart_ioctl(b'r'), ffi::UART_IRQ_INPUT as i32);
+            Sim {
+                avr,
+                rx,
+                input,
+                hist: HashMap::new(),
+                sites: HashMap::new(),
+                shadow: Vec::new(),
+                outer_callee: 0,
+                this_step: HashMap::new(),
+                worst_step: (0, HashMap::new()),
+                step_entry,
+                in_step: None,
+                steps: 0,
+            }
+        }
+    }
+
+    /// The instruction word at byte address `pc` (and the next).
+    fn opcode(&self, pc: u32) -> (u16, u16) {
+        unsafe {
+            let f = (*self.avr).flash;
+            let w = |a: u32| u16::from_le_bytes([*f.add(a as usize), *f.add(a as usize + 1)]);
+            (w(pc), w(pc + 2))
+        }
+    }
+
+    fn sp(&self) -> u16 {
+        unsafe {
+            let d = (*self.avr).data;
+            u16::from_le_bytes([*d.add(0x5d), *d.add(0x5e)])
+        }
+    }
+
+    /// One instruction; its cycles charged to its address inside a step.
+    fn one(&mut self) {
+        let pc = unsafe { (*self.avr).pc };
+        if pc == self.step_entry && self.in_step.is_none() {
+            self.in_step = Some(self.sp());
+            self.steps += 1;
+        }
+        let before = unsafe { (*self.avr).cycle };
+        let state = unsafe { ffi::avr_run(self.avr) };
+        assert!(
+            state != ffi::cpu_Crashed as i32 && state != ffi::cpu_Done as i32,
+            "the firmware stopped (state {state})"
+        );
+        let spent = unsafe { (*self.avr).cycle } - before;
+        if let Some(sp) = self.in_step {
+            *self.hist.entry(pc).or_default() += spent;
+            let callee = if self.shadow.is_empty() {
+                0
+            } else {
+                self.outer_callee
+            };
+            *self.sites.entry(callee).or_default() += spent;
+            *self.this_step.entry(callee).or_default() += spent;
+            let next = unsafe { (*self.avr).pc };
+            let size = match self.opcode(pc) {
+                // call (two words), rcall, icall: a new frame if it jumped.
+                (op, _) if op & 0xfe0e == 0x940e => 4,
+                (op, _) if op & 0xf000 == 0xd000 || op == 0x9509 => 2,
+                _ => 0,
+            };
+            match self.opcode(pc) {
+                _ if size > 0 && next != pc + size => {
+                    if self.shadow.is_empty() {
+                        self.outer_callee = next;
+                    }
+                    self.shadow.push(pc + size)
+                }
+                // ret, reti.
+                (0x9508 | 0x9518, _) => {
+                    self.shadow.pop();
+                }
+                _ => {}
+            }
+            // `ret` from the step pops the return address above the entry SP.
+            if self.sp() > sp {
+                self.in_step = None;
+                self.shadow.clear();
+                let step = std::mem::take(&mut self.this_step);
+                let cycles = step.values().sum();
+                if cycles > self.worst_step.0 {
+                    self.worst_step = (cycles, step);
+                }
+            }
+        }
+    }
+
+    fn send(&mut self, bytes: &[u8]) {
+        for &b in bytes {
+            unsafe { ffi::avr_raise_irq(self.input, b as u32) };
+            // Let the firmware take the byte before the next (simavr's
+            // input FIFO is small).
+            for _ in 0..2_000 {
+                self.one();
+            }
+        }
+    }
+
+    fn take(&mut self, n: usize) -> Vec<u8> {
+        let mut budget: u64 = 400_000_000;
+        while self.rx.len() < n {
+            self.one();
+            budget -= 1;
+            assert!(budget > 0, "no answer from the firmware");
+        }
+        self.rx.drain(..n).collect()
+    }
+
+    fn line(&mut self) -> String {
+        let mut s = Vec::new();
+        loop {
+            let b = self.take(1)[0];
+            if b == b'\n' {
+                return String::from_utf8_lossy(&s).trim_end().to_string();
+            }
+            s.push(b);
+        }
+    }
+}
+
+fn symbol(elf: &std::path::Path, name: &str) -> u32 {
+    let out = Command::new("avr-nm")
+        .arg(elf)
+        .output()
+        .expect("avr-nm (Debian binutils-avr)");
+    String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .find(|l| l.contains(name))
+        .and_then(|l| u32::from_str_radix(l.split_whitespace().next()?, 16).ok())
+        .unwrap_or_else(|| panic!("no symbol {name} in {elf:?}"))
+}
+
+/// A function's name without generic arguments: `<Force>::along` stays
+/// `Force::along`, `Deque<Point, 16>::push_back` becomes `Deque::push_back`.
+fn short(name: &str) -> String {
+    let mut s = String::new();
+    // Per open `<`: whether it opens generic arguments (dropped).
+    let mut open: Vec<bool> = Vec::new();
+    let mut prev = ' ';
+    for c in name.chars() {
+        match c {
+            '<' => open.push(prev.is_alphanumeric() || prev == '_'),
+            '>' => {
+                open.pop();
+            }
+            _ if open.iter().any(|&g| g) => {}
+            _ => s.push(c),
+        }
+        prev = c;
+    }
+    s
+}
+
+/// A profile of the planner steps of some replayed traces.
+pub struct Profile {
+    /// Planner steps run.
+    pub steps: u64,
+    /// Cycles inside the steps, as the profiler counted them.
+    pub cycles: u64,
+    /// Cycles of the steps as the firmware timed them itself (Timer1).
+    pub timed: u64,
+    /// Cycles by function the instructions are in.
+    pub by_function: Vec<(String, u64)>,
+    /// Cycles by what the step's own code called (callees included);
+    /// [`OWN_CODE`] for the step's own instructions.
+    pub by_callee: Vec<(String, u64)>,
+    /// The costliest step: its cycles and the same split.
+    pub worst: (u64, Vec<(String, u64)>),
+    /// Steps whose command differs from the host core's (none: the
+    /// profiled run is the bit-exact one).
+    pub mismatches: usize,
+}
+
+/// [`Profile::by_callee`]'s name for the step's own code (`step_raw` and
+/// what is inlined into it).
+pub const OWN_CODE: &str = "(the step's own code: step_raw and what is inlined)";
+
+/// Replay `traces` through the firmware `elf` and profile its steps.
+pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
+    let entry = symbol(elf, "timed_step");
+    let mut sim = Sim::new(elf, entry);
+    assert_eq!(sim.line(), "READY", "boot line");
+    let mut timed: u64 = 0;
+    let mut mismatches = 0;
+    for t in traces {
+        sim.send(format!("R {} {}\n", t.goal.x, t.goal.y).as_bytes());
+        assert_eq!(sim.line(), "OK", "enter replay");
+        for (f, want) in t.frames.iter().zip(&t.outputs) {
+            let mut msg = vec![0xa5];
+            msg.extend(f.pose.position.x.to_le_bytes());
+            msg.extend(f.pose.position.y.to_le_bytes());
+            msg.extend(f.pose.heading.0.to_le_bytes());
+            for r in f.raw {
+                msg.extend(r.to_le_bytes());
+            }
+            sim.send(&msg);
+            let r = sim.take(10);
+            assert_eq!(r[0], 0x5a, "replay answer");
+            let got = (
+                u16::from_le_bytes([r[1], r[2]]),
+                u16::from_le_bytes([r[3], r[4]]),
+                r[5],
+            );
+            let want = (
+                want.command.heading.0,
+                want.command.step_mm,
+                want.status.code(),
+            );
+            mismatches += usize::from(got != want);
+            timed += u32::from_le_bytes([r[6], r[7], r[8], r[9]]) as u64;
+        }
+        sim.send(&[0x00]);
+        assert_eq!(sim.line(), "OK", "leave replay");
+    }
+    let syms = Symbols::of(elf);
+    let mut inner: HashMap<String, u64> = HashMap::new();
+    for (a, c) in &sim.hist {
+        *inner.entry(syms.name(*a)).or_default() += c;
+    }
+    let by_callee = |m: &HashMap<u32, u64>| -> Vec<(String, u64)> {
+        let mut out: HashMap<String, u64> = HashMap::new();
+        for (a, c) in m {
+            let name = if *a == 0 {
+                OWN_CODE.to_string()
+            } else {
+                syms.name(*a)
+            };
+            *out.entry(name).or_default() += c;
+        }
+        sorted(out)
+    };
+    Profile {
+        steps: sim.steps,
+        cycles: sim.hist.values().sum(),
+        timed,
+        by_function: sorted(inner),
+        by_callee: by_callee(&sim.sites),
+        worst: (sim.worst_step.0, by_callee(&sim.worst_step.1)),
+        mismatches,
+    }
+}
+
+fn sorted(m: HashMap<String, u64>) -> Vec<(String, u64)> {
+    let mut v: Vec<_> = m.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    v
+}
+
+/// The ELF's function symbols, demangled, by address.
+struct Symbols(Vec<(u32, u32, String)>);
+
+impl Symbols {
+    fn of(elf: &std::path::Path) -> Symbols {
+        let out = Command::new("avr-nm")
+            .args(["-S", "--defined-only"])
+            .arg(elf)
+            .output()
+            .expect("avr-nm (Debian binutils-avr)");
+        let mut v: Vec<(u32, u32, String)> = String::from_utf8_lossy(&out.stdout)
+            .lines()
+            .filter_map(|l| {
+                let mut f = l.splitn(4, ' ');
+                let a = u32::from_str_radix(f.next()?, 16).ok()?;
+                let size = u32::from_str_radix(f.next()?, 16).ok()?;
+                let kind = f.next()?;
+                let name = short(&format!("{:#}", rustc_demangle::demangle(f.next()?)));
+                (kind == "t" || kind == "T").then_some((a, size, name))
+            })
+            .collect();
+        v.sort();
+        Symbols(v)
+    }
+
+    fn name(&self, a: u32) -> String {
+        let i = self.0.partition_point(|s| s.0 <= a);
+        match i.checked_sub(1).map(|i| &self.0[i]) {
+            Some((start, size, name)) if a < start + size.max(&2) => name.clone(),
+            _ => format!("0x{a:x}"),
+        }
+    }
+}

@@ -1,0 +1,61 @@
+//! The cycle profiler (`cargo xtask avr-profile`) accounts for the steps
+//! the firmware times itself: same steps, same cycles (to the few the
+//! firmware's own clock reads and call add), every cycle charged once.
+
+use planner_core::AdcProfile;
+use rover_tests::avr::firmware_elf;
+use rover_tests::profile::{profile, OWN_CODE};
+use rover_tests::standard_traces;
+
+#[test]
+fn the_profile_accounts_for_the_timed_steps() {
+    let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
+    let frames: usize = traces.iter().map(|t| t.frames.len()).sum();
+    let p = profile(&firmware_elf(), &traces);
+    assert_eq!(p.steps as usize, frames, "one profiled step per frame");
+    assert_eq!(p.mismatches, 0, "the firmware's commands are the host's");
+    let per_step = p.cycles / p.steps;
+    let timed = p.timed / p.steps;
+    println!("avr profile: {per_step} cycles per step, the firmware timed {timed}");
+    for (name, c) in p.by_callee.iter().take(8) {
+        println!("{:>7}/step  {name}", c / p.steps);
+    }
+    // The profiled span is the whole call (entry to return), the timed
+    // one the planner step between two clock reads inside it.
+    assert!(
+        per_step >= timed && per_step <= timed + timed / 50,
+        "profiled {per_step} against timed {timed} per step"
+    );
+    let split = |v: &[(String, u64)]| v.iter().map(|(_, c)| c).sum::<u64>();
+    assert_eq!(split(&p.by_function), p.cycles, "each cycle charged once");
+    assert_eq!(split(&p.by_callee), p.cycles, "each cycle charged once");
+    assert_eq!(split(&p.worst.1), p.worst.0, "the worst step's split");
+    assert!(
+        p.worst.0 > per_step,
+        "the worst step costs more than the mean"
+    );
+    // Calls are charged to what the step called: the division inside
+    // `atan2` to `atan2`, and the step's own code is part, not all.
+    let of = |name: &str| {
+        p.by_callee
+            .iter()
+            .find(|(n, _)| n.ends_with(name))
+            .map_or(0, |(_, c)| *c)
+    };
+    assert!(of("Angle::atan2") > 0, "atan2 has its share");
+    let own = of(OWN_CODE);
+    assert!(
+        own > 0 && own < p.cycles / 2,
+        "own code {own} of {}",
+        p.cycles
+    );
+    let inside_atan2 = p
+        .by_function
+        .iter()
+        .find(|(n, _)| n.ends_with("Angle::atan2"))
+        .map_or(0, |(_, c)| *c);
+    assert!(
+        of("Angle::atan2") > inside_atan2,
+        "atan2's callees (its division) are charged to it"
+    );
+}
