@@ -120,9 +120,12 @@ pub struct Planner {
     unreachable: bool,
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
     last_readings: Readings,
-    /// The goal's distance and bearing and the position they were worked
-    /// out at: a rover turning in place asks again every cycle.
-    kept_goal: Option<(Point, u16, Angle)>,
+    /// The goal's distance and bearing, the attraction along it (eq. 16's
+    /// first term; below 2^15 per component, so 16 bits), and the position
+    /// they were worked out at: a rover turning in place asks again every
+    /// cycle (on the AVR the attraction's sine and cosine are ~1,100
+    /// cycles).
+    kept_goal: Option<(Point, u16, Angle, [i16; 2])>,
     /// The midpoint force (eq. 13) and the sums it came from (unchanged
     /// while the rover turns in place and stores no new point).
     kept_midpoint: Option<(i32, i32, Force)>,
@@ -241,14 +244,18 @@ impl Planner {
             return stop(Status::SensorFault);
         }
         let robot = pose.position;
-        let (goal_mm, bearing) = match self.kept_goal {
-            Some((at, d, b)) if at == robot => (d, b),
+        let (goal_mm, bearing, pull) = match self.kept_goal {
+            Some((at, d, b, pull)) if at == robot => (d, b, pull),
             _ => {
                 let (gx, gy) = robot.to(self.goal);
                 let d = hypot(gx, gy);
                 let b = Angle::atan2(gy, gx);
-                self.kept_goal = Some((robot, d, b));
-                (d, b)
+                // |ξ_att| ≤ 16 units (the config's check): each component
+                // is at most 2^14 in Q10.
+                let a = forces::attractive(&self.config, b);
+                let pull = [a.x as i16, a.y as i16];
+                self.kept_goal = Some((robot, d, b, pull));
+                (d, b, pull)
             }
         };
         if goal_mm <= self.config.goal_tolerance_mm {
@@ -304,7 +311,11 @@ impl Planner {
 
         // Eq. 16: the sum of the forces; the near-target rule drops the
         // midpoint and off-sensor forces.
-        let mut f = forces::attractive(cfg, bearing)
+        let attraction = Force {
+            x: pull[0] as i32,
+            y: pull[1] as i32,
+        };
+        let mut f = attraction
             .plus(repulsive)
             .plus(self.escape.force_kept(robot, bearing));
         if !near {
