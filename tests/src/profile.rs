@@ -26,6 +26,9 @@ unsafe extern "C" fn on_output(_: *mut ffi::avr_irq_t, value: u32, param: *mut s
     rx.push_back(value as u8);
 }
 
+/// The ATmega328P's interrupt vectors: 26 of two words each.
+const VECTOR_TABLE_END: u32 = 26 * 4;
+
 fn uart_ioctl(kind: u8) -> u32 {
     u32::from_be_bytes([b'u', b'a', kind, b'0'])
 }
@@ -54,6 +57,9 @@ struct Sim {
     /// Stack pointer at the step's entry, while one runs.
     in_step: Option<u16>,
     steps: u64,
+    /// Steps that returned with frames left on the shadow stack (calls
+    /// or returns the decoder missed).
+    unbalanced: u64,
 }
 
 impl Sim {
@@ -94,8 +100,34 @@ impl Sim {
                 step_entry,
                 in_step: None,
                 steps: 0,
+                unbalanced: 0,
             }
         }
+    }
+
+    /// The instruction at byte address `pc`, and if it is a call, its
+    /// return address and target (byte addresses).
+    fn decode(&self, pc: u32) -> (u16, Option<(u32, u32)>) {
+        let (op, k16) = self.opcode(pc);
+        let call = if op & 0xfe0e == 0x940e {
+            // call k: 22-bit word address over two words.
+            let k = ((op as u32 >> 4) & 0x1f) << 17 | (op as u32 & 1) << 16 | k16 as u32;
+            Some((pc + 4, 2 * k))
+        } else if op & 0xf000 == 0xd000 {
+            // rcall k: 12-bit signed word offset.
+            let k = ((op as i32) << 20) >> 20;
+            Some((pc + 2, (pc as i32 + 2 + 2 * k) as u32))
+        } else if op == 0x9509 {
+            // icall: to the word address in Z (r31:r30).
+            let z = unsafe {
+                let d = (*self.avr).data;
+                u16::from_le_bytes([*d.add(30), *d.add(31)])
+            };
+            Some((pc + 2, 2 * z as u32))
+        } else {
+            None
+        };
+        (op, call)
     }
 
     /// The instruction word at byte address `pc` (and the next).
@@ -121,6 +153,7 @@ impl Sim {
             self.in_step = Some(self.sp());
             self.steps += 1;
         }
+        let (op, call) = self.decode(pc);
         let before = unsafe { (*self.avr).cycle };
         let state = unsafe { ffi::avr_run(self.avr) };
         assert!(
@@ -138,28 +171,29 @@ impl Sim {
             *self.sites.entry(callee).or_default() += spent;
             *self.this_step.entry(callee).or_default() += spent;
             let next = unsafe { (*self.avr).pc };
-            let size = match self.opcode(pc) {
-                // call (two words), rcall, icall: a new frame if it jumped.
-                (op, _) if op & 0xfe0e == 0x940e => 4,
-                (op, _) if op & 0xf000 == 0xd000 || op == 0x9509 => 2,
-                _ => 0,
-            };
-            match self.opcode(pc) {
-                _ if size > 0 && next != pc + size => {
-                    if self.shadow.is_empty() {
-                        self.outer_callee = next;
-                    }
-                    self.shadow.push(pc + size)
+            // The instruction's own effect on the call stack first: an
+            // interrupt may have been taken right after it.
+            if let Some((ret, target)) = call {
+                if self.shadow.is_empty() {
+                    self.outer_callee = target;
                 }
+                self.shadow.push(ret);
+            } else if matches!(op, 0x9508 | 0x9518) {
                 // ret, reti.
-                (0x9508 | 0x9518, _) => {
-                    self.shadow.pop();
+                self.shadow.pop();
+            }
+            // An interrupt: simavr went to the vector table. Its `reti`
+            // pops this frame (a Timer1 overflow, say, in a step).
+            if next < VECTOR_TABLE_END && call.is_none() {
+                if self.shadow.is_empty() {
+                    self.outer_callee = next;
                 }
-                _ => {}
+                self.shadow.push(0);
             }
             // `ret` from the step pops the return address above the entry SP.
             if self.sp() > sp {
                 self.in_step = None;
+                self.unbalanced += u64::from(!self.shadow.is_empty());
                 self.shadow.clear();
                 let step = std::mem::take(&mut self.this_step);
                 let cycles = step.values().sum();
@@ -254,6 +288,9 @@ pub struct Profile {
     /// Steps whose command differs from the host core's (none: the
     /// profiled run is the bit-exact one).
     pub mismatches: usize,
+    /// Steps whose calls and returns did not pair up (none, or the split
+    /// by callee is wrong).
+    pub unbalanced: u64,
 }
 
 /// [`Profile::by_callee`]'s name for the step's own code (`step_raw` and
@@ -322,6 +359,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         by_callee: by_callee(&sim.sites),
         worst: (sim.worst_step.0, by_callee(&sim.worst_step.1)),
         mismatches,
+        unbalanced: sim.unbalanced,
     }
 }
 

@@ -14,6 +14,11 @@ fn the_profile_accounts_for_the_timed_steps() {
     let p = profile(&firmware_elf(), &traces);
     assert_eq!(p.steps as usize, frames, "one profiled step per frame");
     assert_eq!(p.mismatches, 0, "the firmware's commands are the host's");
+    assert_eq!(
+        p.unbalanced, 0,
+        "every call the step made returned ({} of {} steps did not)",
+        p.unbalanced, p.steps
+    );
     let per_step = p.cycles / p.steps;
     let timed = p.timed / p.steps;
     println!("avr profile: {per_step} cycles per step, the firmware timed {timed}");
@@ -43,6 +48,18 @@ fn the_profile_accounts_for_the_timed_steps() {
             .map_or(0, |(_, c)| *c)
     };
     assert!(of("Angle::atan2") > 0, "atan2 has its share");
+    // The worst step is in the dead end, among the virtual obstacles.
+    let worst_force = p
+        .worst
+        .1
+        .iter()
+        .find(|(n, _)| n.ends_with("Escape::force"))
+        .map_or(0, |(_, c)| *c);
+    assert!(
+        worst_force > p.worst.0 / 10,
+        "the virtual obstacles' force {worst_force} of the worst step's {}",
+        p.worst.0
+    );
     let own = of(OWN_CODE);
     assert!(
         own > 0 && own < p.cycles / 2,
