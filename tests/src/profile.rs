@@ -280,6 +280,9 @@ pub struct Profile {
     pub timed: u64,
     /// Cycles by function the instructions are in.
     pub by_function: Vec<(String, u64)>,
+    /// Cycles by instruction address (byte address) and its function,
+    /// costliest first: to read beside `avr-objdump -d` of the ELF.
+    pub by_address: Vec<(u32, String, u64)>,
     /// Cycles by what the step's own code called (callees included);
     /// [`OWN_CODE`] for the step's own instructions.
     pub by_callee: Vec<(String, u64)>,
@@ -356,6 +359,15 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         cycles: sim.hist.values().sum(),
         timed,
         by_function: sorted(inner),
+        by_address: {
+            let mut v: Vec<(u32, String, u64)> = sim
+                .hist
+                .iter()
+                .map(|(a, c)| (*a, syms.name(*a), *c))
+                .collect();
+            v.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)));
+            v
+        },
         by_callee: by_callee(&sim.sites),
         worst: (sim.worst_step.0, by_callee(&sim.worst_step.1)),
         mismatches,

@@ -36,6 +36,10 @@ fn main() {
         *worst,
         1,
     );
+    println!("\nthe costliest instructions (avr-objdump -d the ELF to read them):");
+    for (a, name, c) in p.by_address.iter().take(12) {
+        println!("{:>7}/step  0x{a:04x}  {name}", c / steps);
+    }
 }
 
 fn print_table(title: &str, v: &[(String, u64)], total: u64, steps: u64) {
