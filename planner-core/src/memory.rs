@@ -208,6 +208,16 @@ impl Memory {
         }
     }
 
+    /// Make the kept sums those for this robot position and target (a scan
+    /// if they are not), in place: the sums are 17 bytes, and on the AVR
+    /// each copy of them is a `memcpy` call (`cargo xtask avr-profile`
+    /// showed one per step from here).
+    fn keep_sums_at(&mut self, robot: Point, target: Point) {
+        if !matches!(&self.sums, Some(s) if s.robot == robot && s.target == target) {
+            self.sums = Some(self.scan_sums(robot, target));
+        }
+    }
+
     /// The active points' sums by one scan of the memory.
     fn scan_sums(&self, robot: Point, target: Point) -> ActiveSums {
         let mut sums = ActiveSums::zero(robot, target);
@@ -273,9 +283,10 @@ impl Memory {
         robot: Point,
         target: Point,
     ) -> (u8, i32, i32) {
-        let sums = self.sums_at(robot, target);
-        self.sums = Some(sums);
-        sums.away_from(robot)
+        self.keep_sums_at(robot, target);
+        self.sums
+            .as_ref()
+            .map_or((0, 0, 0), |sums| sums.away_from(robot))
     }
 
     /// The midpoint `P_M` of the active points (eq. 11), for reports.
