@@ -193,17 +193,21 @@ impl Planner {
 
     /// Raw counts to readings with `config`'s calibrations.
     pub fn readings_with(config: &Config, raw: &RawCounts) -> Readings {
-        Planner::readings_then(config, raw, |_, r| r)
+        let mut out = [Reading::Clear; SENSOR_COUNT];
+        Planner::readings_into(&mut out, config, raw, |_, r| r);
+        out
     }
 
-    /// Raw counts to readings, each passed through `then(sensor, reading)`
-    /// in the same pass (the step's fold-back filter).
-    fn readings_then(
+    /// Raw counts to readings in `out`, each passed through
+    /// `then(sensor, reading)` in the same pass (the step's fold-back
+    /// filter). Into a place, not returned: on the AVR every copy of the
+    /// five readings (15 bytes) is a `memcpy` call.
+    fn readings_into(
+        out: &mut Readings,
         config: &Config,
         raw: &RawCounts,
         mut then: impl FnMut(usize, Reading) -> Reading,
-    ) -> Readings {
-        let mut out = [Reading::Clear; SENSOR_COUNT];
+    ) {
         for (i, ((o, &c), cal)) in out
             .iter_mut()
             .zip(raw.iter())
@@ -212,7 +216,6 @@ impl Planner {
         {
             *o = then(i, cal.reading(c));
         }
-        out
     }
 
     /// One planner cycle reading the sensors from `sensors`.
@@ -236,8 +239,10 @@ impl Planner {
         // Counts to readings and the fold-back filter, one pass.
         let fold_back = &mut self.fold_back;
         fold_back.look(pose.heading, &self.config.sensor_angles, held);
-        let readings = Planner::readings_then(&self.config, raw, |i, r| fold_back.filter(i, r));
-        self.last_readings = readings;
+        Planner::readings_into(&mut self.last_readings, &self.config, raw, |i, r| {
+            fold_back.filter(i, r)
+        });
+        let readings = &self.last_readings;
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);
         if readings.contains(&Reading::Implausible) {
@@ -272,7 +277,7 @@ impl Planner {
         let near = goal_mm < cfg.sensor_range_mm;
 
         // Collision points (eqs. 7, 8) and the memory of them (eqs. 11-13).
-        let points = forces::collision_points(cfg, &readings, self.paper_step_mm);
+        let points = forces::collision_points(cfg, readings, self.paper_step_mm);
         // The heading's sine and cosine once; each sensor's world direction
         // is its fixed direction turned by them, and serves both the point's
         // position and its repulsion (eqs. 9, 10).
@@ -327,7 +332,7 @@ impl Planner {
             self.kept_midpoint = Some((ax, ay, mid));
             f = f.plus(mid);
             if self.following {
-                f = f.plus(forces::off_sensor(cfg, heading_dir, motion, &readings));
+                f = f.plus(forces::off_sensor(cfg, heading_dir, motion, readings));
             }
         }
         // Eq. 17.
@@ -371,7 +376,7 @@ impl Planner {
         } else {
             self.turn_side = 0;
         }
-        let free = |relative: Angle| command::free_distance_mm(cfg, &readings, relative);
+        let free = |relative: Angle| command::free_distance_mm(cfg, readings, relative);
         // Steps shorter than the executor can make are none.
         let at_least_min = |step: u16| if step < cfg.min_step_mm { 0 } else { step };
         let mut step = if relative.abs_signed() > half.0 {
