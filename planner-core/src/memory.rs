@@ -86,6 +86,7 @@ impl Span {
     /// in 16 bits (half the AVR's work of 32): below `lo`, the difference
     /// wraps above the span, since `lo + len` ≤ `i16::MAX` and a point is
     /// ≥ `i16::MIN`, so `p − lo + 2^16` > `len`.
+    #[inline(always)]
     fn axes(&self, p: Point) -> (bool, bool) {
         (
             p.x.wrapping_sub(self.x_lo) as u16 <= self.x_len,
@@ -94,6 +95,7 @@ impl Span {
     }
 
     /// Whether `p`'s class finds it between robot and target.
+    #[inline(always)]
     fn holds(&self, p: &Remembered) -> bool {
         let (in_x, in_y) = self.axes(p.point);
         // The class's discriminant has one bit per axis it must lie
