@@ -24,6 +24,10 @@ pub type RawCounts = [u16; SENSOR_COUNT];
 /// Bins of a calibration table; the table has `CAL_BINS + 1` entries.
 pub const CAL_BINS: usize = 32;
 
+/// Bits of a bin index, and the bits below them in a 16-bit count.
+const BIN_BITS: u32 = CAL_BINS.trailing_zeros();
+const FRACTION_BITS: u32 = 16 - BIN_BITS;
+
 /// GP2Y0A21YK0F datasheet points (typical curve): (millivolts, millimetres),
 /// nearest first.
 pub const GP2Y0A21_MV_MM: [(u16, u16); 8] = [
@@ -193,12 +197,19 @@ impl Calibration {
         } else if raw < self.far_count {
             Reading::Clear
         } else {
-            let i = (raw >> self.shift) as usize;
-            let f = (raw & ((1 << self.shift) - 1)) as i32;
+            // The count as a 16-bit fraction of full scale (`raw < 2^bits`,
+            // `bits = shift + BIN_BITS`): the bin is its top `BIN_BITS`,
+            // the offset in the bin the rest, scaled by `2^(FRACTION_BITS −
+            // shift)`. The interpolation `(Δ·offset + half) >> shift` is the
+            // same with numerator and divisor scaled alike, and takes one
+            // variable shift instead of four (the AVR shifts one bit per
+            // instruction, a 32-bit value four instructions a bit).
+            let x = raw << (FRACTION_BITS - self.shift as u32);
+            let i = (x >> FRACTION_BITS) as usize;
+            let f = (x & ((1 << FRACTION_BITS) - 1)) as i32;
             let d0 = self.mm.get(i).copied().unwrap_or(0) as i32;
             let d1 = self.mm.get(i + 1).copied().unwrap_or(d0 as u16) as i32;
-            let half = 1i32 << (self.shift - 1);
-            let d = d0 + (((d1 - d0) * f + half) >> self.shift);
+            let d = d0 + (((d1 - d0) * f + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS);
             Reading::Range(d.clamp(0, u16::MAX as i32) as u16)
         }
     }
@@ -473,6 +484,31 @@ mod tests {
                 let err = (got as i32 - mm as i32).abs();
                 // Resampling onto 32 bins costs at most this much here.
                 assert!(err <= 25, "{adc:?} {mv} mV: {got} mm vs {mm} mm");
+            }
+        }
+    }
+
+    #[test]
+    fn the_scaled_interpolation_is_the_plain_one() {
+        // Every count of the 8-, 10-, 12- and 16-bit ADCs against the
+        // interpolation with the bin's own shift.
+        for bits in [8u8, 10, 12, 16] {
+            let adc = AdcProfile {
+                bits,
+                vref_mv: 5_000,
+            };
+            let cal = Calibration::gp2y0a21(adc).unwrap();
+            for raw in cal.far_count..=cal.near_count {
+                let (s, i) = (cal.shift, (raw >> cal.shift) as usize);
+                let f = (raw & ((1 << s) - 1)) as i32;
+                let d0 = cal.mm[i] as i32;
+                let d1 = cal.mm.get(i + 1).map_or(d0, |&d| d as i32);
+                let d = d0 + (((d1 - d0) * f + (1 << (s - 1))) >> s);
+                assert_eq!(
+                    cal.reading(raw),
+                    Reading::Range(d as u16),
+                    "{bits} bits, {raw}"
+                );
             }
         }
     }
