@@ -132,35 +132,55 @@ impl Avr {
         assert_eq!(ok.as_deref(), Some("OK"), "enter replay");
         let mut got = Vec::new();
         for (k, f) in frames.iter().enumerate() {
-            let mut msg = vec![0xa5];
-            msg.extend(f.pose.position.x.to_le_bytes());
-            msg.extend(f.pose.position.y.to_le_bytes());
-            msg.extend(f.pose.heading.0.to_le_bytes());
-            for r in f.raw {
-                msg.extend(r.to_le_bytes());
-            }
-            self.send(&msg);
-            let r = self.read_bytes(10, 500).expect("replay answer");
-            assert_eq!(
-                r[0],
-                0x5a,
-                "replay answer header, frame {k}: {r:?} then {:?}",
-                String::from_utf8_lossy(&self.rx)
-            );
-            let status = Status::from_code(r[5]).expect("status code");
-            let out = Output {
-                command: Command {
-                    heading: Angle(u16::from_le_bytes([r[1], r[2]])),
-                    step_mm: u16::from_le_bytes([r[3], r[4]]),
-                },
-                status,
-            };
-            got.push((out, u32::from_le_bytes([r[6], r[7], r[8], r[9]])));
+            self.send(&replay_frame(f));
+            let r = self
+                .read_bytes(REPLAY_ANSWER_LEN, 500)
+                .expect("replay answer");
+            let answer = replay_answer(&r).unwrap_or_else(|| {
+                panic!(
+                    "replay answer, frame {k}: {r:?} then {:?}",
+                    String::from_utf8_lossy(&self.rx)
+                )
+            });
+            got.push(answer);
         }
         self.send(&[0x00]);
         assert_eq!(self.read_line(100).as_deref(), Some("OK"), "leave replay");
         got
     }
+}
+
+/// A replay-mode frame for the firmware: `0xa5`, then x, y, heading and
+/// the five raw counts, little-endian (`firmware-avr/src/replay.rs`).
+pub fn replay_frame(f: &Frame) -> Vec<u8> {
+    let mut msg = vec![0xa5];
+    msg.extend(f.pose.position.x.to_le_bytes());
+    msg.extend(f.pose.position.y.to_le_bytes());
+    msg.extend(f.pose.heading.0.to_le_bytes());
+    for r in f.raw {
+        msg.extend(r.to_le_bytes());
+    }
+    msg
+}
+
+/// Bytes of the firmware's answer to a replay frame.
+pub const REPLAY_ANSWER_LEN: usize = 10;
+
+/// The firmware's answer to a replay frame: `0x5a`, heading, step, status
+/// code, then the step's cycles; `None` if it is not one.
+pub fn replay_answer(r: &[u8]) -> Option<(Output, u32)> {
+    let r: &[u8; REPLAY_ANSWER_LEN] = r.try_into().ok()?;
+    if r[0] != 0x5a {
+        return None;
+    }
+    let out = Output {
+        command: Command {
+            heading: Angle(u16::from_le_bytes([r[1], r[2]])),
+            step_mm: u16::from_le_bytes([r[3], r[4]]),
+        },
+        status: Status::from_code(r[5])?,
+    };
+    Some((out, u32::from_le_bytes([r[6], r[7], r[8], r[9]])))
 }
 
 /// How a closed-loop drive ended.

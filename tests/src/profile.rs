@@ -12,7 +12,7 @@
 //! avr-tester hides simavr's CPU state (the program counter), so this
 //! drives simavr through `simavr-ffi` itself.
 
-use crate::avr::F_CPU;
+use crate::avr::{replay_answer, replay_frame, F_CPU, REPLAY_ANSWER_LEN};
 use crate::Trace;
 use simavr_ffi as ffi;
 use std::collections::{HashMap, VecDeque};
@@ -311,28 +311,11 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         sim.send(format!("R {} {}\n", t.goal.x, t.goal.y).as_bytes());
         assert_eq!(sim.line(), "OK", "enter replay");
         for (f, want) in t.frames.iter().zip(&t.outputs) {
-            let mut msg = vec![0xa5];
-            msg.extend(f.pose.position.x.to_le_bytes());
-            msg.extend(f.pose.position.y.to_le_bytes());
-            msg.extend(f.pose.heading.0.to_le_bytes());
-            for r in f.raw {
-                msg.extend(r.to_le_bytes());
-            }
-            sim.send(&msg);
-            let r = sim.take(10);
-            assert_eq!(r[0], 0x5a, "replay answer");
-            let got = (
-                u16::from_le_bytes([r[1], r[2]]),
-                u16::from_le_bytes([r[3], r[4]]),
-                r[5],
-            );
-            let want = (
-                want.command.heading.0,
-                want.command.step_mm,
-                want.status.code(),
-            );
-            mismatches += usize::from(got != want);
-            timed += u32::from_le_bytes([r[6], r[7], r[8], r[9]]) as u64;
+            sim.send(&replay_frame(f));
+            let r = sim.take(REPLAY_ANSWER_LEN);
+            let (got, cycles) = replay_answer(&r).expect("replay answer");
+            mismatches += usize::from(got != *want);
+            timed += cycles as u64;
         }
         sim.send(&[0x00]);
         assert_eq!(sim.line(), "OK", "leave replay");

@@ -41,20 +41,16 @@ fn the_profile_accounts_for_the_timed_steps() {
     );
     // Calls are charged to what the step called: the division inside
     // `atan2` to `atan2`, and the step's own code is part, not all.
-    let of = |name: &str| {
-        p.by_callee
+    let cycles_of = |split: &[(String, u64)], name: &str| {
+        split
             .iter()
             .find(|(n, _)| n.ends_with(name))
             .map_or(0, |(_, c)| *c)
     };
+    let of = |name: &str| cycles_of(&p.by_callee, name);
     assert!(of("Angle::atan2") > 0, "atan2 has its share");
     // The worst step is in the dead end, among the virtual obstacles.
-    let worst_force = p
-        .worst
-        .1
-        .iter()
-        .find(|(n, _)| n.ends_with("Escape::force"))
-        .map_or(0, |(_, c)| *c);
+    let worst_force = cycles_of(&p.worst.1, "Escape::force");
     assert!(
         worst_force > p.worst.0 / 10,
         "the virtual obstacles' force {worst_force} of the worst step's {}",
@@ -66,11 +62,7 @@ fn the_profile_accounts_for_the_timed_steps() {
         "own code {own} of {}",
         p.cycles
     );
-    let inside_atan2 = p
-        .by_function
-        .iter()
-        .find(|(n, _)| n.ends_with("Angle::atan2"))
-        .map_or(0, |(_, c)| *c);
+    let inside_atan2 = cycles_of(&p.by_function, "Angle::atan2");
     assert!(
         of("Angle::atan2") > inside_atan2,
         "atan2's callees (its division) are charged to it"
