@@ -228,7 +228,7 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
     use sim_host::sensor::{SensorMode, VirtualSensors};
     use sim_host::world::World;
     let world = World::from_scenario(sc);
-    let mm_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick as f64 / 1e6;
+    let m_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick as f64 / 1e6;
     let base = planner_core::drive::Body::REFERENCE.wheel_base_mm as f64 / 1e3;
     let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
     let mut sensors = VirtualSensors::new(
@@ -253,7 +253,10 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
     let go = format!("G {} {}", (goal.x * 1e3).round(), (goal.y * 1e3).round());
     assert_eq!(a.request(&go).as_deref(), Some("OK"), "{go}");
 
-    let (mut acc_l, mut acc_r) = (0.0f64, 0.0f64);
+    // Each wheel's encoder disc position, in ticks: an edge wherever it
+    // crosses a whole tick, whichever way it turns (the firmware counts it
+    // in the direction it drives that wheel).
+    let (mut disc_l, mut disc_r) = (0.5f64, 0.5f64);
     let mut path = 0.0;
     let mut steps = 0;
     let mut t = 0.0;
@@ -303,15 +306,16 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
         h = h1;
         t += dt;
         // Encoder edges for the wheel travel (at most one per millisecond
-        // per wheel at this speed).
-        acc_l += (vl * dt).abs();
-        acc_r += (vr * dt).abs();
-        if acc_l >= mm_per_tick {
-            acc_l -= mm_per_tick;
+        // per wheel at this speed): a wheel that turns back over an edge it
+        // just passed makes that edge again, and one that stops short of the
+        // next makes none (the travel is not summed regardless of sign).
+        let (was_l, was_r) = (disc_l.floor(), disc_r.floor());
+        disc_l += vl * dt / m_per_tick;
+        disc_r += vr * dt / m_per_tick;
+        if disc_l.floor() != was_l {
             a.avr.pins().pd2().set_high();
         }
-        if acc_r >= mm_per_tick {
-            acc_r -= mm_per_tick;
+        if disc_r.floor() != was_r {
             a.avr.pins().pd3().set_high();
         }
         a.avr.run_for(64u64);
