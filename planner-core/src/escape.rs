@@ -501,7 +501,6 @@ impl Escape {
             if ax >= v.reach_mm || ay >= v.reach_mm {
                 continue;
             }
-            let (dx, dy) = v.centre.to(robot);
             // |dx|, |dy| < reach ≤ 2^15 − 1: s < 2^31.
             let (ax, ay) = (ax as u32, ay as u32);
             let s = ax * ax + ay * ay;
@@ -513,15 +512,17 @@ impl Escape {
                 // 2^16/V_r), so every product stays below 2^32 and neither
                 // loses the small pushes' bits.
                 let s = (s >> law.shift).max(1);
-                let t = ((rim_sq << 15) + s / 2) / s;
-                let pt = (rim * t + (1 << 14)) >> 15;
+                // Both fit 16 bits (t ≤ 2^15, so p·t/2^15 ≤ p ≤
+                // MAX_PUSH): on the AVR the loop then spills less.
+                let t = (((rim_sq << 15) + s / 2) / s) as u16 as u32;
+                let pt = ((rim * t + (1 << 14)) >> 15) as u16 as u32;
                 // Always inlined: `cargo xtask avr-report` measured the
                 // worst step 1,154 cycles shorter than with a closure.
                 #[inline(always)]
-                fn along(d: i32, a: u32, (t, per_radius_q16): (u32, u32), pt: u32) -> i32 {
+                fn along(negative: bool, a: u32, (t, per_radius_q16): (u32, u32), pt: u32) -> i32 {
                     let u = (t * a * per_radius_q16 + (1 << 15)) >> 16;
                     let m = ((pt * u + (1 << 14)) >> 15) as i32;
-                    if d < 0 {
+                    if negative {
                         -m
                     } else {
                         m
@@ -538,11 +539,13 @@ impl Escape {
                 } else {
                     (t, per_radius_q16)
                 };
+                // The signs of robot − centre, by 16-bit compares.
                 Force {
-                    x: along(dx, ax, factors, pt),
-                    y: along(dy, ay, factors, pt),
+                    x: along(robot.x < v.centre.x, ax, factors, pt),
+                    y: along(robot.y < v.centre.y, ay, factors, pt),
                 }
             } else {
+                let (dx, dy) = v.centre.to(robot);
                 let r = isqrt(s) as u32;
                 match ((rim << 12) + r / 2).checked_div(r) {
                     // p/r in Q12, rounded (p ≤ 2^16), then times |dx|, |dy|
