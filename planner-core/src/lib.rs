@@ -118,6 +118,9 @@ pub struct Planner {
     stepped_from: Point,
     paper_step_mm: u16,
     unreachable: bool,
+    /// The cycle's collision points, for pictures and reports (feature
+    /// `report`; the firmwares go without: 21 bytes of the AVR's RAM).
+    #[cfg(feature = "report")]
     last_points: heapless::Vec<Point, SENSOR_COUNT>,
     last_readings: Readings,
     /// The goal's distance and bearing, the attraction along it (eq. 16's
@@ -148,6 +151,7 @@ impl Planner {
             stepped_from: NOWHERE,
             paper_step_mm: range,
             unreachable: false,
+            #[cfg(feature = "report")]
             last_points: heapless::Vec::new(),
             last_readings: [Reading::Clear; SENSOR_COUNT],
             kept_goal: None,
@@ -170,6 +174,7 @@ impl Planner {
         self.stepped_from = NOWHERE;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
+        #[cfg(feature = "report")]
         self.last_points.clear();
         self.last_readings = [Reading::Clear; SENSOR_COUNT];
         self.kept_goal = None;
@@ -243,6 +248,7 @@ impl Planner {
             fold_back.filter(i, r)
         });
         let readings = &self.last_readings;
+        #[cfg(feature = "report")]
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);
         if readings.contains(&Reading::Implausible) {
@@ -287,6 +293,7 @@ impl Planner {
         for p in points.iter() {
             let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
             let at = robot.offset_dir(toward, p.distance_mm);
+            #[cfg(feature = "report")]
             let _ = self.last_points.push(at);
             if nearest.is_none_or(|(d, _)| p.distance_mm < d) {
                 nearest = Some((p.distance_mm, at));
@@ -465,7 +472,8 @@ impl Planner {
         &self.escape
     }
 
-    /// The collision points of the last cycle, world mm.
+    /// The collision points of the last cycle, world mm (feature `report`).
+    #[cfg(feature = "report")]
     pub fn last_collision_points(&self) -> &[Point] {
         &self.last_points
     }
