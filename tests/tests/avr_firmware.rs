@@ -73,7 +73,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~16,500 cycles on average, ~40,600 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~16,500 cycles on average, ~40,500 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
