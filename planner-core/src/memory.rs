@@ -216,7 +216,10 @@ impl Memory {
     /// Make the kept sums those for this robot position and target (a scan
     /// if they are not), in place: the sums are 17 bytes, and on the AVR
     /// each copy of them is a `memcpy` call (`cargo xtask avr-profile`
-    /// showed one per step from here).
+    /// showed one per step from here). Not inlined: the AVR calls it
+    /// either way, and inlined into `remember` it costs the STM32's worst
+    /// step 95 instructions (`cargo xtask stm32-report`).
+    #[inline(never)]
     fn keep_sums_at(&mut self, robot: Point, target: Point) {
         if !matches!(&self.sums, Some(s) if s.robot == robot && s.target == target) {
             self.sums = Some(self.scan_sums(robot, target));
@@ -263,15 +266,16 @@ impl Memory {
             return false;
         }
         // A stored point is active (the span's rule let it in): the kept
-        // sums gain it, and lose the point it evicts if that was active.
-        let mut sums = self.sums_at(robot, target);
-        sums.add(point);
-        if let Some(gone) = self.points.push(new) {
-            if span.holds(&gone) {
+        // sums (those of the memory before the store) gain it, and lose
+        // the point it evicts if that was active.
+        self.keep_sums_at(robot, target);
+        let gone = self.points.push(new);
+        if let Some(sums) = self.sums.as_mut() {
+            sums.add(point);
+            if let Some(gone) = gone.filter(|g| span.holds(g)) {
                 sums.remove(gone.point);
             }
         }
-        self.sums = Some(sums);
         true
     }
 
