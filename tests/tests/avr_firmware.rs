@@ -73,7 +73,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~16,500 cycles on average, ~40,500 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~16,300 cycles on average, ~39,900 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
@@ -84,7 +84,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~27.8 KiB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~27.1 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
