@@ -5,7 +5,8 @@
 //! time and charges each instruction's cycles to its address while a
 //! planner step runs (from the entry of `timed_step` until it returns),
 //! and to the function the step's own code called it under (a shadow call
-//! stack kept from the `call`/`rcall`/`icall` and `ret` instructions).
+//! stack kept from the `call`/`rcall`/`icall`, `ret`/`reti` instructions
+//! and interrupt entries).
 //! Functions are named from the ELF's symbol table: the debug line tables
 //! of the LTO-built AVR image name the wrong files, so a profile by source
 //! line is not to be had; mark a function `#[inline(never)]` to see it.
@@ -42,16 +43,15 @@ struct Sim {
     /// Cycles per instruction address while a step runs.
     hist: HashMap<u32, u64>,
     step_entry: u32,
-    /// Cycles by the entry address of the function the step's own code
-    /// called (0: the step's own instructions): an instruction of a called
-    /// function is charged to the outermost call it runs under.
-    sites: HashMap<u32, u64>,
+    /// Cycles of all steps by the entry address of the function the step's
+    /// own code called (0: the step's own instructions): an instruction of
+    /// a called function is charged to the outermost call it runs under.
+    by_callee: HashMap<u32, u64>,
     /// Return addresses of the calls made inside the step, and where the
     /// outermost one went.
     shadow: Vec<u32>,
     outer_callee: u32,
-    /// This step's cycles by outermost callee (0: the step's own code),
-    /// and the worst step's.
+    /// The same split of this step, and of the worst step.
     this_step: HashMap<u32, u64>,
     worst_step: (u64, HashMap<u32, u64>),
     /// Stack pointer at the step's entry, while one runs.
@@ -92,7 +92,7 @@ impl Sim {
                 rx,
                 input,
                 hist: HashMap::new(),
-                sites: HashMap::new(),
+                by_callee: HashMap::new(),
                 shadow: Vec::new(),
                 outer_callee: 0,
                 this_step: HashMap::new(),
@@ -168,7 +168,6 @@ impl Sim {
             } else {
                 self.outer_callee
             };
-            *self.sites.entry(callee).or_default() += spent;
             *self.this_step.entry(callee).or_default() += spent;
             let next = unsafe { (*self.avr).pc };
             // The instruction's own effect on the call stack first: an
@@ -196,6 +195,9 @@ impl Sim {
                 self.unbalanced += u64::from(!self.shadow.is_empty());
                 self.shadow.clear();
                 let step = std::mem::take(&mut self.this_step);
+                for (callee, c) in &step {
+                    *self.by_callee.entry(*callee).or_default() += c;
+                }
                 let cycles = step.values().sum();
                 if cycles > self.worst_step.0 {
                     self.worst_step = (cycles, step);
@@ -235,18 +237,6 @@ impl Sim {
             s.push(b);
         }
     }
-}
-
-fn symbol(elf: &std::path::Path, name: &str) -> u32 {
-    let out = Command::new("avr-nm")
-        .arg(elf)
-        .output()
-        .expect("avr-nm (Debian binutils-avr)");
-    String::from_utf8_lossy(&out.stdout)
-        .lines()
-        .find(|l| l.contains(name))
-        .and_then(|l| u32::from_str_radix(l.split_whitespace().next()?, 16).ok())
-        .unwrap_or_else(|| panic!("no symbol {name} in {elf:?}"))
 }
 
 /// A function's name without generic arguments: `<Force>::along` stays
@@ -302,7 +292,10 @@ pub const OWN_CODE: &str = "(the step's own code: step_raw and what is inlined)"
 
 /// Replay `traces` through the firmware `elf` and profile its steps.
 pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
-    let entry = symbol(elf, "timed_step");
+    let syms = Symbols::of(elf);
+    let entry = syms
+        .entry_of("firmware_avr::timed_step")
+        .unwrap_or_else(|| panic!("no timed_step in {elf:?}"));
     let mut sim = Sim::new(elf, entry);
     assert_eq!(sim.line(), "READY", "boot line");
     let mut timed: u64 = 0;
@@ -320,7 +313,6 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         sim.send(&[0x00]);
         assert_eq!(sim.line(), "OK", "leave replay");
     }
-    let syms = Symbols::of(elf);
     let mut inner: HashMap<String, u64> = HashMap::new();
     for (a, c) in &sim.hist {
         *inner.entry(syms.name(*a)).or_default() += c;
@@ -351,7 +343,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
             v.sort_by(|a, b| b.2.cmp(&a.2).then(a.0.cmp(&b.0)));
             v
         },
-        by_callee: by_callee(&sim.sites),
+        by_callee: by_callee(&sim.by_callee),
         worst: (sim.worst_step.0, by_callee(&sim.worst_step.1)),
         mismatches,
         unbalanced: sim.unbalanced,
@@ -387,6 +379,11 @@ impl Symbols {
             .collect();
         v.sort();
         Symbols(v)
+    }
+
+    /// The address of the function named `name`.
+    fn entry_of(&self, name: &str) -> Option<u32> {
+        self.0.iter().find(|s| s.2 == name).map(|s| s.0)
     }
 
     fn name(&self, a: u32) -> String {
