@@ -1,12 +1,14 @@
-//! The QEMU build: replay a recorded trace (pose and raw counts per step,
-//! compiled in from `ROVER_TRACE`) through the planner, time each step with
-//! SysTick, log command and count with defmt over semihosting, then exit
-//! QEMU. The host test decodes the log with `defmt-print` and compares each
-//! command with the host core's, bit for bit.
+//! The QEMU build: replay a recorded trace (the guard's samples of each
+//! advance, then pose and raw counts per step, compiled in from
+//! `ROVER_TRACE`) through the planner, time each step with SysTick, log
+//! command, count and the guard's verdicts with defmt over semihosting,
+//! then exit QEMU. The host test decodes the log with `defmt-print` and
+//! compares each answer with the host core's, bit for bit.
 //!
-//! Trace format (little-endian), one segment per recorded run: goal x, y
-//! (i16), frame count (u16), then frames of pose x, y (i16), heading (u16),
-//! five raw counts (u16).
+//! Trace format (little-endian u16 words), one segment per recorded run:
+//! goal x, y (i16), frame count, then frames of: the number of guard
+//! samples, each as the step still to go and five raw counts; pose x, y
+//! (i16), heading, five raw counts.
 //!
 //! What is counted: SysTick runs on the CPU clock (168 MHz in QEMU's
 //! netduinoplus2); with `-icount shift=0` every instruction takes 1 ns of
@@ -18,13 +20,10 @@ use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use defmt_semihosting as _;
 use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, Planner, Point, Pose, RawCounts, ScriptedSensors,
+    AdcProfile, Angle, ConfigBuilder, Guard, Planner, Point, Pose, ScriptedSensors,
 };
 
 static TRACE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/trace.bin"));
-
-/// Longest trace the build accepts.
-const MAX_FRAMES: usize = 600;
 
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
@@ -78,30 +77,13 @@ pub fn run() -> ! {
         }
     };
     let mut planner = Planner::new(config, Point::new(0, 0));
+    let raw_at = |at: usize| core::array::from_fn::<u16, 5, _>(|i| word(at + 2 * i));
     // Segments: goal x, y (i16), frame count (u16), then the frames.
     let mut at = 0;
     while at + 6 <= TRACE.len() {
         let goal = Point::new(word(at) as i16, word(at + 2) as i16);
-        let n = (word(at + 4) as usize).min(MAX_FRAMES);
+        let n = word(at + 4) as usize;
         at += 6;
-        let mut poses: heapless::Vec<Pose, MAX_FRAMES> = heapless::Vec::new();
-        let mut frames: heapless::Vec<RawCounts, MAX_FRAMES> = heapless::Vec::new();
-        for _ in 0..n {
-            let pose = Pose {
-                position: Point::new(word(at) as i16, word(at + 2) as i16),
-                heading: Angle(word(at + 4)),
-            };
-            let raw = [
-                word(at + 6),
-                word(at + 8),
-                word(at + 10),
-                word(at + 12),
-                word(at + 14),
-            ];
-            at += 16;
-            let _ = poses.push(pose);
-            let _ = frames.push(raw);
-        }
         defmt::info!(
             "segment {=usize} frames, goal {=i16} {=i16}",
             n,
@@ -109,11 +91,28 @@ pub fn run() -> ! {
             goal.y
         );
         planner.set_goal(goal);
-        let mut sensors = ScriptedSensors::new(&frames);
-        for pose in poses.iter() {
+        for _ in 0..n {
+            let mut stops = 0u8;
+            let samples = word(at) as u32;
+            at += 2;
+            for i in 0..samples {
+                let remaining = word(at);
+                let raw = raw_at(at + 2);
+                at += 12;
+                if planner.guard_raw(&raw, remaining) == Guard::Stop {
+                    stops |= 1u8.wrapping_shl(i);
+                }
+            }
+            let pose = Pose {
+                position: Point::new(word(at) as i16, word(at + 2) as i16),
+                heading: Angle(word(at + 4)),
+            };
+            let raw = [raw_at(at + 6)];
+            at += 16;
+            let mut sensors = ScriptedSensors::new(&raw);
             let t0 = now();
             compiler_fence(Ordering::SeqCst);
-            let out = planner.step(core::hint::black_box(*pose), &mut sensors);
+            let out = planner.step(core::hint::black_box(pose), &mut sensors);
             compiler_fence(Ordering::SeqCst);
             let t1 = now();
             let Ok(out) = out else {
@@ -122,11 +121,12 @@ pub fn run() -> ! {
             };
             let t = ticks(t0, t1).saturating_sub(overhead);
             defmt::info!(
-                "step {=u16} {=u16} {=u8} {=u32}",
+                "step {=u16} {=u16} {=u8} {=u32} {=u8}",
                 out.command.heading.0,
                 out.command.step_mm,
                 out.status.code(),
-                t
+                t,
+                stops
             );
         }
     }

@@ -2,10 +2,14 @@
 //! bounds it (ALGORITHMS.md §5): a commanded translation never enters space
 //! that the current readings do not show free, allowing for the robot radius
 //! and a clearance margin; during the advance the executor calls the guard
-//! with fresh readings and stops short if something appears.
+//! with fresh readings and stops short if something appears. Ours: the
+//! guard also keeps what its beams saw beside the way ([`Flank`]), and the
+//! next steps keep the body off it, where the five beams of a turned view
+//! cannot look.
 
 use crate::config::Config;
-use crate::fixed::{isqrt, mul_q14, Angle, Dir};
+use crate::fixed::{box_within, isqrt, mul_q14, Angle, Dir, Point};
+use crate::forces::sensor_direction;
 use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// One cycle's command: turn in place to `heading` (world frame), then
@@ -101,6 +105,18 @@ pub enum Guard {
 /// minimum range (`standoff_mm`) beyond the sensor faces, so the rover never
 /// drives an obstacle into the fold-back region where it would read as far.
 pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u16 {
+    free_way_mm(cfg, readings, None, relative)
+}
+
+/// [`free_distance_mm`], and the disc, widened by a 20 mm margin only,
+/// kept off the flank points the guard saw beside the way (see [`Flank`]):
+/// `flank` is the robot's position and heading and the points (world mm).
+pub fn free_way_mm(
+    cfg: &Config,
+    readings: &Readings,
+    flank: Option<(Point, Dir, &[Point])>,
+    relative: Angle,
+) -> u16 {
     let rs = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
     let reach = (cfg.sensor_offset_mm + cfg.sensor_range_mm) as i32;
     let standoff = (cfg.sensor_offset_mm + cfg.standoff_mm) as i32;
@@ -110,9 +126,8 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
         Some(i) => cfg.sensor_dirs[i.min(SENSOR_COUNT - 1)],
         None => Dir::of(relative),
     };
-    let (c, s) = (dir.c, dir.s);
     let mut free = (reach - rs).max(0);
-    for (&r, dir) in readings.iter().zip(cfg.sensor_dirs.iter()) {
+    for (&r, sensor) in readings.iter().zip(cfg.sensor_dirs.iter()) {
         // A clear beam never lowers `free`: its end is `reach` from the
         // centre at some angle δ from the path, and the disc meets it after
         // reach·cos δ − √(rs² − reach²·sin² δ), which grows with |δ| from
@@ -122,10 +137,17 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
             Reading::Clear => continue,
             Reading::TooClose | Reading::Implausible => cfg.sensor_offset_mm as i32,
         };
-        // The beam end in the robot frame, then in the frame of `relative`.
-        let (x, y) = dir.scaled(e);
-        let along = mul_q14(x, c) + mul_q14(y, s);
-        let lateral = mul_q14(y, c) - mul_q14(x, s);
+        // The beam end in the robot frame, then in the frame of `relative`:
+        // how far along first. The beam lowers `free` only through the
+        // stand-off (`along − standoff`) or the chord (at least
+        // `along − rs`, the half chord being at most rs): if neither can be
+        // below `free`, its side offset is not needed.
+        let (x, y) = sensor.scaled(e);
+        let along = along(x, y, dir);
+        if along - standoff.max(rs) >= free {
+            continue;
+        }
+        let lateral = lateral(x, y, dir);
         if lateral.abs() < rs {
             free = free.min((along - standoff).max(0));
             if free == 0 {
@@ -134,12 +156,159 @@ pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u
             // The chord can only lower `free` if `along − rs` is below it
             // (the half chord is at most rs): skip the square root otherwise.
             if along - rs < free {
-                let half_chord = isqrt((rs * rs - lateral * lateral) as u32) as i32;
-                free = free.min((along - half_chord).max(0));
+                free = free.min((along - half_chord(rs, lateral)).max(0));
             }
         }
     }
+    let Some((robot, heading, points)) = flank else {
+        return free as u16;
+    };
+    // The path's world direction once, rather than each point in the
+    // robot's frame.
+    let dir = dir.rotated(heading);
+    let rb = cfg.robot_radius_mm as i32 + FLANK_MARGIN_MM;
+    for &p in points {
+        if free == 0 {
+            break;
+        }
+        // As for the beams: the half chord is at most rb, so only a point
+        // with `along − rb` below `free` can lower it.
+        let (x, y) = robot.to(p);
+        let along = along(x, y, dir);
+        if along <= 0 || along - rb >= free {
+            continue;
+        }
+        let lateral = lateral(x, y, dir);
+        if lateral.abs() < rb {
+            free = free.min((along - half_chord(rb, lateral)).max(0));
+        }
+    }
     free as u16
+}
+
+/// How far along a path along `dir` the point (`x`, `y`) lies.
+fn along(x: i32, y: i32, dir: Dir) -> i32 {
+    mul_q14(x, dir.c) + mul_q14(y, dir.s)
+}
+
+/// How far to the left of a path along `dir` the point (`x`, `y`) lies.
+fn lateral(x: i32, y: i32, dir: Dir) -> i32 {
+    mul_q14(y, dir.c) - mul_q14(x, dir.s)
+}
+
+/// Half the chord a disc of radius `r` cuts from a line `lateral` from
+/// its centre (`|lateral| < r`).
+fn half_chord(r: i32, lateral: i32) -> i32 {
+    isqrt((r * r - lateral * lateral) as u32) as i32
+}
+
+/// How many of the guard's flank points the planner keeps (see [`Flank`]).
+pub const FLANK_POINTS: usize = 4;
+
+/// Beams' points within this of the advance's line (mm, either side) are
+/// flank points: the body passes them closely, and a turn towards them
+/// puts them where no beam of the new view looks (see [`Flank`]).
+const FLANK_LATERAL_MM: i32 = 170;
+
+/// A flank point within this (mm, either axis) of a kept one replaces it:
+/// a beam sliding along a face leaves the last point it saw of it.
+const FLANK_MERGE_MM: u16 = 40;
+
+/// Flank points farther than this from the rover (mm, either axis) are
+/// forgotten as it advances: beyond it the beams of any new view see the
+/// ground again.
+const FLANK_REACH_MM: u16 = 300;
+
+/// Margin (mm) beyond the robot radius that the step keeps from a flank
+/// point: less than the clearance, which would stop the rover beside
+/// what it has just passed.
+const FLANK_MARGIN_MM: i32 = 20;
+
+/// Ours (the safety rule's blind flank, docs/bench.md "The flank"): the
+/// points the guard's beams saw beside the way during the advances, world
+/// mm. The five beams cover ±40°; after a turn towards a side the body's
+/// first centimetres sweep ground within `r / sin 40°` of the centre that
+/// no beam of the new view can see — where the rover has just passed a
+/// corner. The beams saw it as the rover approached it, so the step's free
+/// distance also keeps the body off these points.
+#[derive(Clone, Debug, Default)]
+pub struct Flank {
+    points: heapless::Vec<Point, FLANK_POINTS>,
+    /// The advance in progress: its heading and length (it starts where
+    /// the planner's cycle was; `None` while the rover turns in place).
+    advance: Option<(Angle, u16)>,
+}
+
+impl Flank {
+    /// The kept points.
+    pub fn points(&self) -> &[Point] {
+        &self.points
+    }
+
+    /// The cycle commanded `step_mm` along `heading` (0: none).
+    pub(crate) fn start(&mut self, heading: Angle, step_mm: u16) {
+        self.advance = if step_mm > 0 {
+            Some((heading, step_mm))
+        } else {
+            None
+        };
+    }
+
+    /// A guard sample: the advance from `from` has `remaining_mm` to go and
+    /// the beams read `readings`; keep the points beside the way.
+    #[inline(never)]
+    pub(crate) fn saw(
+        &mut self,
+        cfg: &Config,
+        from: Point,
+        readings: &Readings,
+        remaining_mm: u16,
+    ) {
+        let Some((heading, step)) = self.advance else {
+            return;
+        };
+        let dir = Dir::of(heading);
+        let centre = from.offset_dir(dir, step.saturating_sub(remaining_mm));
+        // Points the rover has left behind: the forgetting is here, where
+        // the rover moves, not in the step (a rover turning in place keeps
+        // what it has).
+        self.points
+            .retain(|&p| box_within(p, centre, FLANK_REACH_MM));
+        for (i, (&r, sensor)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
+            let Reading::Range(mm) = r else { continue };
+            let e = cfg.sensor_offset_mm + mm;
+            if mul_q14(sensor.s, e as i32).abs() < FLANK_LATERAL_MM {
+                // Beyond the reach the rover has yet to pass it; it keeps
+                // the nearer sightings as it comes.
+                let p = centre.offset_dir(sensor_direction(cfg, dir, i), e);
+                if box_within(p, centre, FLANK_REACH_MM) {
+                    self.keep(p, centre);
+                }
+            }
+        }
+    }
+
+    /// Keep `p`, seen with the rover at `centre`: it replaces a kept
+    /// point near it (a beam sliding along a face leaves the last point it
+    /// saw of it) or, all places taken, the kept point farthest from the
+    /// rover if `p` is nearer (the nearest matter: the farthest are the
+    /// first the rover leaves behind).
+    fn keep(&mut self, p: Point, centre: Point) {
+        if let Some(q) = self
+            .points
+            .iter_mut()
+            .find(|q| box_within(**q, p, FLANK_MERGE_MM))
+        {
+            *q = p;
+        } else if let Err(p) = self.points.push(p) {
+            let far = |q: &Point| q.x.abs_diff(centre.x).max(q.y.abs_diff(centre.y));
+            if let Some(q) = self.points.iter_mut().max_by_key(|q| far(q)) {
+                if far(&p) < far(q) {
+                    *q = p;
+                }
+            }
+        }
+    }
 }
 
 /// The guard (§5): with fresh readings taken while advancing, may the robot
@@ -227,6 +396,164 @@ mod tests {
         r[2] = Reading::Range(300);
         let got = free_distance_mm(&c, &r, Angle::from_deg(-20));
         assert!((got as i32 - 176).abs() <= 1, "{got}");
+    }
+
+    /// The +40° beam reading 102 mm: 202 mm from the centre, 155 ahead
+    /// and 130 to the left.
+    fn left_face() -> Readings {
+        let mut r = [Reading::Clear; SENSOR_COUNT];
+        r[4] = Reading::Range(102);
+        r
+    }
+
+    #[test]
+    fn the_flank_keeps_what_the_beams_saw_beside_the_way() {
+        let c = cfg();
+        let mut f = Flank::default();
+        let r = left_face();
+        // Turning in place: no advance, nothing kept.
+        f.saw(&c, Point::new(0, 0), &r, 500);
+        assert!(f.points().is_empty());
+        // 375 then 385 mm into an advance along +x from the origin: the
+        // same face 10 mm on, one point, the newer.
+        f.start(Angle::ZERO, 500);
+        f.saw(&c, Point::new(0, 0), &r, 500 - 375);
+        f.saw(&c, Point::new(0, 0), &r, 500 - 385);
+        assert_eq!(f.points().len(), 1);
+        let p = f.points()[0];
+        assert!((p.x - 540).abs() <= 1 && (p.y - 130).abs() <= 1, "{p:?}");
+        // Far to the side (the +40° beam, 257 mm to the left), or far
+        // ahead (the front beam, 500 mm on): not kept.
+        let mut wide = [Reading::Clear; SENSOR_COUNT];
+        wide[4] = Reading::Range(300);
+        f.saw(&c, Point::new(0, 0), &wide, 100);
+        let mut ahead = [Reading::Clear; SENSOR_COUNT];
+        ahead[2] = Reading::Range(400);
+        f.saw(&c, Point::new(0, 0), &ahead, 100);
+        assert_eq!(f.points().len(), 1);
+        // At the advance's end the point is 130 mm to the left, 40 ahead:
+        // straight on the body passes it; turned 40° left it is 114 mm
+        // ahead and 74 to the side, and the disc widened to 120 mm meets
+        // it after 114 − √(120² − 74²) ≈ 20 mm; turned right it is behind.
+        let end = Point::new(500, 0);
+        let clear = [Reading::Clear; SENSOR_COUNT];
+        let east = Dir::of(Angle::ZERO);
+        let free = |deg| {
+            free_way_mm(
+                &c,
+                &clear,
+                Some((end, east, f.points())),
+                Angle::from_deg(deg),
+            )
+        };
+        assert_eq!(free(0), 760);
+        assert!((free(40) as i32 - 20).abs() <= 2, "{}", free(40));
+        assert_eq!(free(-40), 760);
+        // The rover turned 90° left, looking 50° right of its heading: the
+        // same way, the same limit.
+        let north = Dir::of(Angle::from_deg(90));
+        let turned = free_way_mm(
+            &c,
+            &clear,
+            Some((end, north, f.points())),
+            Angle::from_deg(-50),
+        );
+        assert!((turned as i32 - 20).abs() <= 2, "{turned}");
+        // Kept while near, forgotten beyond 300 mm.
+        // Kept while the rover is near (a new advance, 800 then 900 mm
+        // along), forgotten beyond 300 mm.
+        f.start(Angle::ZERO, 1_000);
+        f.saw(&c, Point::new(0, 0), &clear, 200);
+        assert_eq!(f.points().len(), 1);
+        f.saw(&c, Point::new(0, 0), &clear, 100);
+        assert!(f.points().is_empty());
+    }
+
+    #[test]
+    fn a_full_flank_keeps_the_nearest_points() {
+        let c = cfg();
+        let mut f = Flank::default();
+        f.start(Angle::ZERO, 2_000);
+        for k in 0..6 {
+            f.saw(&c, Point::new(0, 0), &left_face(), 2_000 - 100 * k);
+        }
+        let mut xs: Vec<i16> = f.points().iter().map(|p| p.x).collect();
+        xs.sort();
+        assert_eq!(xs.len(), FLANK_POINTS);
+        for (x, want) in xs.iter().zip([355, 455, 555, 655]) {
+            assert!((x - want).abs() <= 1, "{xs:?}");
+        }
+        // All places taken, a point farther than every kept one (the
+        // front beam, 290 mm ahead of the rover at 500) is not kept.
+        let mut ahead = [Reading::Clear; SENSOR_COUNT];
+        ahead[2] = Reading::Range(190);
+        f.saw(&c, Point::new(0, 0), &ahead, 2_000 - 500);
+        assert!(f.points().iter().all(|p| p.x < 700), "{:?}", f.points());
+        // 700 mm along, the one at 355 is forgotten and frees its place.
+        let clear = [Reading::Clear; SENSOR_COUNT];
+        f.saw(&c, Point::new(0, 0), &clear, 2_000 - 700);
+        assert_eq!(f.points().len(), 3);
+        f.saw(&c, Point::new(0, 0), &left_face(), 2_000 - 700);
+        assert_eq!(f.points().len(), 4);
+    }
+
+    /// The rule without its shortcuts (the skipped side offsets and square
+    /// roots, the stop at zero): every beam in the corridor lowers `free`
+    /// to its stand-off and its chord limits.
+    fn free_plain(c: &Config, readings: &Readings, relative: Angle) -> u16 {
+        let rs = (c.robot_radius_mm + c.clearance_mm) as i32;
+        let standoff = (c.sensor_offset_mm + c.standoff_mm) as i32;
+        let dir = Dir::of(relative);
+        let ends = readings
+            .iter()
+            .zip(c.sensor_dirs.iter())
+            .filter_map(|(r, d)| {
+                let e = match *r {
+                    Reading::Range(mm) => c.sensor_offset_mm + mm,
+                    Reading::Clear => return None,
+                    _ => c.sensor_offset_mm,
+                };
+                let (x, y) = d.scaled(e as i32);
+                Some((along(x, y, dir), lateral(x, y, dir)))
+            });
+        let limits = ends
+            .filter(|&(_, l)| l.abs() < rs)
+            .map(|(a, l)| (a - standoff).min(a - half_chord(rs, l)).max(0));
+        let reach = (c.sensor_offset_mm + c.sensor_range_mm) as i32 - rs;
+        limits.fold(reach.max(0), i32::min) as u16
+    }
+
+    #[test]
+    fn the_shortcuts_change_no_free_distance() {
+        // 100,000 random readings and headings (a fixed xorshift sequence).
+        let c = cfg();
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = || {
+            x ^= x << 13;
+            x ^= x >> 7;
+            x ^= x << 17;
+            x
+        };
+        for _ in 0..100_000 {
+            let mut r = [Reading::Clear; SENSOR_COUNT];
+            for v in r.iter_mut() {
+                *v = match next() % 10 {
+                    0..=5 => Reading::Range((next() % 900) as u16),
+                    6..=8 => Reading::Clear,
+                    _ => Reading::TooClose,
+                };
+            }
+            // Both the usual headings (a sensor's: their table) and any.
+            let rel = match next() % 3 {
+                0 => c.sensor_angles[(next() % 5) as usize],
+                _ => Angle((next() % 65_536) as u16),
+            };
+            assert_eq!(
+                free_distance_mm(&c, &r, rel),
+                free_plain(&c, &r, rel),
+                "{r:?} {rel:?}"
+            );
+        }
     }
 
     #[test]

@@ -13,7 +13,9 @@
 //! [`Planner::guard_raw`] with fresh counts before it drives and during the
 //! advance (after a turn it stands still for one sensor period first, so
 //! that the guard's first look is at the new way: the step was planned
-//! from the view before the turn).
+//! from the view before the turn). What the guard's beams see beside the
+//! way is kept ([`command::Flank`]): the guard's looks are inputs of the
+//! next steps as much as the counts the steps are given.
 //!
 //! ```
 //! use planner_core::{AdcProfile, ConfigBuilder, Planner, Point, Pose, Angle, Status};
@@ -133,6 +135,8 @@ pub struct Planner {
     /// The midpoint force (eq. 13) and the sums it came from (unchanged
     /// while the rover turns in place and stores no new point).
     kept_midpoint: Option<(i32, i32, Force)>,
+    /// What the guard saw beside the way (the safety rule's blind flank).
+    flank: command::Flank,
 }
 
 impl Planner {
@@ -157,10 +161,13 @@ impl Planner {
             last_readings: [Reading::Clear; SENSOR_COUNT],
             kept_goal: None,
             kept_midpoint: None,
+            flank: command::Flank::default(),
         }
     }
 
-    /// A new goal: forgets the memory, virtual obstacles and status.
+    /// A new goal: forgets the memory, virtual obstacles, the guard's flank
+    /// points and status (as a new planner would: a replayed run starts
+    /// from nothing on every target).
     pub fn set_goal(&mut self, goal: Point) {
         // Field by field, not `*self = Planner::new(..)`: that would put a
         // second planner (and config) on the AVR's small stack.
@@ -180,6 +187,7 @@ impl Planner {
         self.last_readings = [Reading::Clear; SENSOR_COUNT];
         self.kept_goal = None;
         self.kept_midpoint = None;
+        self.flank = command::Flank::default();
     }
 
     /// The goal.
@@ -384,7 +392,9 @@ impl Planner {
         } else {
             self.turn_side = 0;
         }
-        let free = |relative: Angle| command::free_distance_mm(cfg, readings, relative);
+        let flank = self.flank.points();
+        let flank = (!flank.is_empty()).then_some((robot, heading_dir, flank));
+        let free = |relative: Angle| command::free_way_mm(cfg, readings, flank, relative);
         // Steps shorter than the executor can make are none.
         let at_least_min = |step: u16| if step < cfg.min_step_mm { 0 } else { step };
         let mut step = if relative.abs_signed() > half.0 {
@@ -448,6 +458,7 @@ impl Planner {
             }
         }
         self.stepped_from = if step > 0 { robot } else { NOWHERE };
+        self.flank.start(heading, step);
         Output {
             command: Command {
                 heading,
@@ -459,8 +470,16 @@ impl Planner {
 
     /// The guard the executor calls during an advance with fresh raw counts
     /// and the part of the step still to go.
-    pub fn guard_raw(&self, raw: &RawCounts, remaining_mm: u16) -> Guard {
-        command::guard(&self.config, &self.readings(raw), remaining_mm)
+    pub fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        let readings = self.readings(raw);
+        self.flank
+            .saw(&self.config, self.stepped_from, &readings, remaining_mm);
+        command::guard(&self.config, &readings, remaining_mm)
+    }
+
+    /// The points the guard saw beside the way (see [`command::Flank`]).
+    pub fn flank(&self) -> &command::Flank {
+        &self.flank
     }
 
     /// The remembered collision points.
@@ -631,6 +650,41 @@ mod tests {
         assert_eq!(out.command.step_mm, seen_mm + 200);
         assert_eq!(p.last_collision_points().len(), 1);
         assert_eq!(p.memory().len(), 1);
+    }
+
+    #[test]
+    fn a_step_keeps_off_what_the_guard_saw_beside_the_way() {
+        // A rover drives along +x; during the advance its +40° beam sees a
+        // face 150 mm to the left of the way (outside the guard's 140 mm
+        // corridor), about (540, 150). Next cycle, from (439, 52), the way
+        // to the goal passes that point 45° to its left, 141 mm off, where
+        // no beam looks: the beams see nothing, and without the guard's
+        // flank points the rover would step out the full reach over it.
+        let goal = Point::new(3_000, 0);
+        let mut seen = planner(goal);
+        let mut blind = planner(goal);
+        let face = count_for(&seen, 133);
+        for p in [&mut seen, &mut blind] {
+            let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+            assert_eq!(out.command.step_mm, 760);
+        }
+        for gone in [342, 352, 362] {
+            let g = seen.guard_raw(&[0, 0, 0, 0, face], 760 - gone);
+            assert_eq!(g, Guard::Continue);
+            blind.guard_raw(&[0; 5], 760 - gone);
+        }
+        assert_eq!(seen.flank().points().len(), 1);
+        assert!(blind.flank().points().is_empty());
+        let steps = [&mut seen, &mut blind].map(|p| {
+            let out = p.step_raw(at(439, 52, -1), &[0; 5]);
+            assert_eq!(out.status, Status::Moving);
+            out.command.step_mm
+        });
+        assert_eq!(steps[1], 760);
+        assert!((20..60).contains(&steps[0]), "{steps:?}");
+        // A new goal starts from nothing, the flank included.
+        seen.set_goal(goal);
+        assert!(seen.flank().points().is_empty());
     }
 
     #[test]

@@ -15,10 +15,15 @@
 //! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault).
 //!
 //! Replay mode (for bit-exactness and cycle counts from a recorded trace):
-//! the host sends frames of 17 bytes, `0xA5`, then x, y (i16), heading (u16),
-//! five raw counts (u16), all little-endian; the firmware answers each with
-//! 10 bytes: `0x5A`, heading (u16), step (u16), status (u8: 0 moving,
-//! 1 arrived, 2 unreachable, 3 fault), step cycles (u32). A frame starting
+//! the host sends frames of `0xA5`, the number `n` (u8, at most 8) of the
+//! guard's samples during the advance before the step, `n` samples of the
+//! step still to go (u16) and five raw counts (u16), then the step's x, y
+//! (i16), heading (u16) and five raw counts (u16), all little-endian; the
+//! firmware runs the guard on each sample, then the step, and answers with
+//! 15 bytes: `0x5A`, heading (u16), step (u16), status (u8: 0 moving,
+//! 1 arrived, 2 unreachable, 3 fault), step cycles (u32), the guard's
+//! verdicts (u8, bit `i` set if sample `i` said stop), the cycles of its
+//! costliest look (u32). A frame starting
 //! with any other byte ends replay mode (`OK`). Motors, ADC sampling and the
 //! control tick are off during replay so that nothing interrupts the step.
 

@@ -156,9 +156,9 @@ impl SimPlanner {
     }
 
     /// The guard: may the advance go on for `remaining_m`?
-    pub fn guard(&self, raw: &RawCounts, remaining_m: f64) -> bool {
+    pub fn guard(&mut self, raw: &RawCounts, remaining_m: f64) -> bool {
         let mm = (remaining_m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16;
-        let g = match &self.core {
+        let g = match &mut self.core {
             Core::Eapf(p) => p.guard_raw(raw, mm),
             Core::Apf(p) => p.guard_raw(raw, mm),
         };

@@ -240,9 +240,16 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         let raw = sensors.read(&world, p, heading, t);
         let out = planner.step(op, oh, &raw);
         if debug {
+            // The beams' true ranges (mm; "-" beyond reach) beside the counts.
+            let true_mm = (0..planner_core::SENSOR_COUNT).map(|i| {
+                sensors
+                    .true_distance(&world, p, heading, i, t)
+                    .map_or("-".to_string(), |d| format!("{:.0}", d * 1000.0))
+            });
             eprintln!(
-                "step {steps:4} t {t:7.2} pos ({:.3},{:.3}) hd {:6.1} raw {:?} -> hd {:6.1} step {:.3} {:?}",
-                p.x, p.y, heading.to_degrees(), raw, out.heading.to_degrees(), out.step_m, out.status
+                "step {steps:4} t {t:7.2} pos ({:.3},{:.3}) hd {:6.1} raw {:?} true [{}] -> hd {:6.1} step {:.3} {:?}",
+                p.x, p.y, heading.to_degrees(), raw, true_mm.collect::<Vec<_>>().join(", "),
+                out.heading.to_degrees(), out.step_m, out.status
             );
         }
         for q in planner.last_collision_points() {

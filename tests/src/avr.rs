@@ -1,7 +1,7 @@
 //! The ATmega328P firmware in simavr (through avr-tester): build it, replay
 //! recorded traces through its planner, read its size.
 
-use crate::{clean_cargo, repo_root, Frame};
+use crate::{clean_cargo, repo_root, Answer, Frame};
 use avr_tester::AvrTester;
 use planner_core::{Angle, Command, Output, Point, Status};
 use std::path::PathBuf;
@@ -126,8 +126,8 @@ impl Avr {
     }
 
     /// Replay frames toward `goal` in the firmware's replay mode: its
-    /// outputs and the cycles of each planner step.
-    pub fn replay(&mut self, goal: Point, frames: &[Frame]) -> Vec<(Output, u32)> {
+    /// answers and what each frame's step and guard looks cost.
+    pub fn replay(&mut self, goal: Point, frames: &[Frame]) -> Vec<Replayed> {
         let ok = self.request(&format!("R {} {}", goal.x, goal.y));
         assert_eq!(ok.as_deref(), Some("OK"), "enter replay");
         let mut got = Vec::new();
@@ -150,10 +150,18 @@ impl Avr {
     }
 }
 
-/// A replay-mode frame for the firmware: `0xa5`, then x, y, heading and
-/// the five raw counts, little-endian (`firmware-avr/src/replay.rs`).
+/// A replay-mode frame for the firmware: `0xa5`, the number of guard
+/// samples, each as the step still to go and the five raw counts, then x,
+/// y, heading and the five raw counts of the step, little-endian
+/// (`firmware-avr/src/replay.rs`).
 pub fn replay_frame(f: &Frame) -> Vec<u8> {
-    let mut msg = vec![0xa5];
+    let mut msg = vec![0xa5, f.guards.len() as u8];
+    for g in &f.guards {
+        msg.extend(g.remaining_mm.to_le_bytes());
+        for r in g.raw {
+            msg.extend(r.to_le_bytes());
+        }
+    }
     msg.extend(f.pose.position.x.to_le_bytes());
     msg.extend(f.pose.position.y.to_le_bytes());
     msg.extend(f.pose.heading.0.to_le_bytes());
@@ -164,23 +172,43 @@ pub fn replay_frame(f: &Frame) -> Vec<u8> {
 }
 
 /// Bytes of the firmware's answer to a replay frame.
-pub const REPLAY_ANSWER_LEN: usize = 10;
+pub const REPLAY_ANSWER_LEN: usize = 15;
+
+/// The firmware's answer to a replay frame and what it cost.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Replayed {
+    /// The guard's verdicts and the step's output.
+    pub answer: Answer,
+    /// Cycles of the planner step.
+    pub cycles: u32,
+    /// Cycles of the frame's costliest guard look (0 without one).
+    pub guard_cycles: u32,
+}
 
 /// The firmware's answer to a replay frame: `0x5a`, heading, step, status
-/// code, then the step's cycles; `None` if it is not one.
-pub fn replay_answer(r: &[u8]) -> Option<(Output, u32)> {
+/// code, the step's cycles, the guard's verdicts (bit `i`: sample `i`
+/// said stop), the costliest guard look's cycles; `None` if it is not one.
+pub fn replay_answer(r: &[u8]) -> Option<Replayed> {
     let r: &[u8; REPLAY_ANSWER_LEN] = r.try_into().ok()?;
     if r[0] != 0x5a {
         return None;
     }
-    let out = Output {
+    let output = Output {
         command: Command {
             heading: Angle(u16::from_le_bytes([r[1], r[2]])),
             step_mm: u16::from_le_bytes([r[3], r[4]]),
         },
         status: Status::from_code(r[5])?,
     };
-    Some((out, u32::from_le_bytes([r[6], r[7], r[8], r[9]])))
+    let answer = Answer {
+        guard_stops: r[10],
+        output,
+    };
+    Some(Replayed {
+        answer,
+        cycles: u32::from_le_bytes([r[6], r[7], r[8], r[9]]),
+        guard_cycles: u32::from_le_bytes([r[11], r[12], r[13], r[14]]),
+    })
 }
 
 /// How a closed-loop drive ended.

@@ -1,6 +1,6 @@
 //! Shared pieces of the cross-target tests: recorded input traces (pose and
-//! raw counts per planner step, from sim-host's worlds and sensors) and the
-//! host core's answers to them, plus the emulator harnesses of the two
+//! raw counts per planner step, and the guard's samples of each advance,
+//! from sim-host's worlds and sensors) and the host core's answers to them, plus the emulator harnesses of the two
 //! firmwares ([`avr`], [`stm32`]).
 //!
 //! Crates: `avr-tester` (simavr inside) drives the ATmega328P firmware: ADC
@@ -10,7 +10,7 @@ pub mod avr;
 pub mod profile;
 pub mod stm32;
 
-use planner_core::{AdcProfile, ConfigBuilder, Output, Planner, Point, Pose, RawCounts};
+use planner_core::{AdcProfile, ConfigBuilder, Guard, Output, Planner, Point, Pose, RawCounts};
 use sim_host::geom::V2;
 use sim_host::planners::{to_angle, to_point, to_rad};
 use sim_host::scenario::Scenario;
@@ -49,13 +49,41 @@ pub fn scenario(rel: &str) -> Scenario {
     Scenario::load(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
 }
 
-/// Inputs of one planner step.
+/// One look of the guard during an advance: the raw counts and the part of
+/// the step still to go.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct GuardSample {
+    /// Raw ADC counts the guard read.
+    pub raw: RawCounts,
+    /// The step still to go, mm.
+    pub remaining_mm: u16,
+}
+
+/// At most this many guard samples per advance in a trace (a replay
+/// answer gives their verdicts as the bits of one byte).
+pub const MAX_GUARD_SAMPLES: usize = 8;
+
+/// Inputs of one planner step, and the guard's looks during the advance
+/// before it: what the planner learns from them (its flank points) is part
+/// of what the step answers.
+#[derive(Clone, Debug, PartialEq, Eq)]
 pub struct Frame {
+    /// The guard's samples of the last advance, oldest first (at most
+    /// [`MAX_GUARD_SAMPLES`]).
+    pub guards: Vec<GuardSample>,
     /// Pose the planner was given.
     pub pose: Pose,
     /// Raw ADC counts it read.
     pub raw: RawCounts,
+}
+
+/// What the core answered to a frame.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Answer {
+    /// The guard's verdicts: bit `i` set if sample `i` said stop.
+    pub guard_stops: u8,
+    /// The step's output.
+    pub output: Output,
 }
 
 /// A recorded run: the goal, the inputs of each step and what the host
@@ -68,14 +96,33 @@ pub struct Trace {
     pub goal: Point,
     /// Inputs.
     pub frames: Vec<Frame>,
-    /// Host core outputs, one per frame.
-    pub outputs: Vec<Output>,
+    /// Host core answers, one per frame.
+    pub outputs: Vec<Answer>,
+}
+
+/// The guard's samples of `f` through `planner`: the verdict bits of
+/// [`Answer::guard_stops`].
+pub fn run_guards(planner: &mut Planner, f: &Frame) -> u8 {
+    let mut stops = 0;
+    for (i, g) in f.guards.iter().enumerate() {
+        if planner.guard_raw(&g.raw, g.remaining_mm) == Guard::Stop {
+            stops |= 1 << i;
+        }
+    }
+    stops
 }
 
 /// Record up to `steps` planner steps on a scenario with realistic sensors
 /// for `adc`. The rover follows each command exactly (no physics): the
 /// point is to exercise the planner on realistic inputs, obstacles in view,
-/// memory filling up, escape engaged.
+/// memory filling up, escape engaged, flank points kept. During each
+/// advance the guard looks at up to [`MAX_GUARD_SAMPLES`] points of it,
+/// one sensor period (40 ms) apart so that each look reads where the rover
+/// is; its verdicts are recorded, and the recorded rover goes the whole
+/// step either way, as it did before the guard was in the traces. (Ending
+/// the advance where the guard says stop, as the executor does, moves the
+/// dead end's trace to steps that cost the STM32 up to 3,149 instructions,
+/// over issue 6's 3,000: `docs/avr-cycles.md`.)
 pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace {
     let world = World::from_scenario(sc);
     let cfg = ConfigBuilder::new(adc).build().expect("default config");
@@ -91,20 +138,50 @@ pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace 
         frames: Vec::new(),
         outputs: Vec::new(),
     };
-    for k in 0..steps {
-        let raw = sensors.read(&world, p, h, k as f64 * 0.05);
+    let (mut guards, mut guard_stops) = (Vec::new(), 0);
+    // Sensor time, s: 50 ms for a step, 40 for each look of the guard.
+    let mut t = 0.0;
+    for _ in 0..steps {
+        t += 0.05;
+        let raw = sensors.read(&world, p, h, t);
         let pose = Pose {
             position: to_point(p),
             heading: to_angle(h),
         };
-        let out = planner.step_raw(pose, &raw);
-        trace.frames.push(Frame { pose, raw });
-        trace.outputs.push(out);
-        if out.status != planner_core::Status::Moving {
+        let output = planner.step_raw(pose, &raw);
+        trace.frames.push(Frame {
+            guards: std::mem::take(&mut guards),
+            pose,
+            raw,
+        });
+        trace.outputs.push(Answer {
+            guard_stops,
+            output,
+        });
+        if output.status != planner_core::Status::Moving {
             break;
         }
-        h = to_rad(out.command.heading);
-        p = p + V2::from_angle(h) * (out.command.step_mm as f64 / 1000.0);
+        h = to_rad(output.command.heading);
+        // The guard looks at 0, 1/8, 2/8, … of the step.
+        let step = output.command.step_mm;
+        let piece = step.div_ceil(MAX_GUARD_SAMPLES as u16);
+        let mut done = 0;
+        guard_stops = 0;
+        for i in 0..MAX_GUARD_SAMPLES {
+            if done >= step {
+                break;
+            }
+            t += 0.04;
+            let at = p + V2::from_angle(h) * (done as f64 / 1000.0);
+            let raw = sensors.read(&world, at, h, t);
+            let remaining_mm = step - done;
+            guards.push(GuardSample { raw, remaining_mm });
+            if planner.guard_raw(&raw, remaining_mm) == Guard::Stop {
+                guard_stops |= 1 << i;
+            }
+            done = (done + piece).min(step);
+        }
+        p = p + V2::from_angle(h) * (step as f64 / 1000.0);
     }
     trace
 }

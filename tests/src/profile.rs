@@ -306,9 +306,9 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         for (f, want) in t.frames.iter().zip(&t.outputs) {
             sim.send(&replay_frame(f));
             let r = sim.take(REPLAY_ANSWER_LEN);
-            let (got, cycles) = replay_answer(&r).expect("replay answer");
-            mismatches += usize::from(got != *want);
-            timed += cycles as u64;
+            let got = replay_answer(&r).expect("replay answer");
+            mismatches += usize::from(got.answer != *want);
+            timed += got.cycles as u64;
         }
         sim.send(&[0x00]);
         assert_eq!(sim.line(), "OK", "leave replay");

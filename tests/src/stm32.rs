@@ -2,7 +2,7 @@
 //! build it with a recorded trace compiled in, run it, decode its defmt log
 //! with `defmt-print`, and read back its commands and step counts.
 
-use crate::{clean_cargo, repo_root, Trace};
+use crate::{clean_cargo, repo_root, Answer, Trace};
 use planner_core::{Angle, Command, Output, Status};
 use std::io::Write;
 use std::path::PathBuf;
@@ -19,6 +19,13 @@ pub fn encode(traces: &[Trace]) -> Vec<u8> {
         b.extend(t.goal.y.to_le_bytes());
         b.extend((t.frames.len() as u16).to_le_bytes());
         for f in &t.frames {
+            b.extend((f.guards.len() as u16).to_le_bytes());
+            for g in &f.guards {
+                b.extend(g.remaining_mm.to_le_bytes());
+                for r in g.raw {
+                    b.extend(r.to_le_bytes());
+                }
+            }
             b.extend(f.pose.position.x.to_le_bytes());
             b.extend(f.pose.position.y.to_le_bytes());
             b.extend(f.pose.heading.0.to_le_bytes());
@@ -70,8 +77,8 @@ pub fn elf_size(elf: &std::path::Path) -> (u32, u32, u32) {
 pub struct QemuRun {
     /// `(loop instructions, SysTick ticks)` of the calibration loop.
     pub calibration: (u32, u32),
-    /// Command and SysTick ticks of each step, all segments in order.
-    pub steps: Vec<(Output, u32)>,
+    /// Answer and SysTick ticks of each step, all segments in order.
+    pub steps: Vec<(Answer, u32)>,
 }
 
 /// Build the `qemu` firmware with `traces` compiled in and run it.
@@ -157,7 +164,11 @@ pub fn run_traces(traces: &[Trace]) -> QemuRun {
                     },
                     status,
                 };
-                run.steps.push((out, num(5)));
+                let answer = Answer {
+                    guard_stops: num(6) as u8,
+                    output: out,
+                };
+                run.steps.push((answer, num(5)));
             }
             Some("done") => done = true,
             _ => {}

@@ -1,10 +1,11 @@
 //! A recorded sensor trace replayed through the core's scripted source gives
 //! the same commands, bit for bit, as the live run that recorded it: the
-//! core is deterministic and its only inputs are pose and raw counts. This is
-//! the host half of the bit-exactness check the firmware builds share.
+//! core is deterministic and its only inputs are pose and raw counts (of
+//! the steps and of the guard's looks during the advances). This is the
+//! host half of the bit-exactness check the firmware builds share.
 
 use planner_core::{AdcProfile, ConfigBuilder, Planner, RawCounts, ScriptedSensors};
-use rover_tests::{record, scenario};
+use rover_tests::{record, run_guards, scenario, Answer};
 
 #[test]
 fn replayed_trace_gives_identical_commands() {
@@ -20,10 +21,22 @@ fn replayed_trace_gives_identical_commands() {
     let frames: Vec<RawCounts> = t.frames.iter().map(|f| f.raw).collect();
     let mut replay = Planner::new(cfg, t.goal);
     let mut script = ScriptedSensors::new(&frames);
+    let mut with_flank = 0;
     for (f, want) in t.frames.iter().zip(&t.outputs) {
-        let got = replay.step(f.pose, &mut script).unwrap();
-        assert_eq!(&got, want);
+        let guard_stops = run_guards(&mut replay, f);
+        with_flank += usize::from(!replay.flank().points().is_empty());
+        let output = replay.step(f.pose, &mut script).unwrap();
+        assert_eq!(
+            &Answer {
+                guard_stops,
+                output
+            },
+            want
+        );
     }
-    assert!(t.outputs.iter().any(|o| o.command.step_mm > 0));
+    assert!(t.outputs.iter().any(|o| o.output.command.step_mm > 0));
+    // The trace exercises the guard and the flank points it keeps.
+    assert!(t.frames.iter().any(|f| !f.guards.is_empty()));
+    assert!(with_flank > 0, "no step with flank points");
     assert_eq!(script.remaining(), 0);
 }

@@ -24,7 +24,7 @@ mod serial;
 use core::f32::consts::TAU;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::protocol::{self, Request};
-use planner_core::{Angle, Command, Output};
+use planner_core::{Angle, Command, Config, Guard, Output, Pose, RawCounts};
 use planner_float::{FloatPlanner, Math};
 use ufmt::uwriteln;
 
@@ -65,6 +65,42 @@ impl Math<f32> for AvrLibc {
     }
 }
 
+/// The float step behind the replay protocol. It has no flank points
+/// (planner-float is the EAPF step alone), so the guard's samples only
+/// need an answer.
+struct FloatReplay<'a> {
+    planner: FloatPlanner<f32, AvrLibc>,
+    cfg: &'a Config,
+}
+
+impl replay::Replay for FloatReplay<'_> {
+    fn guard(&mut self, _: &RawCounts, _: u16) -> (Guard, u32) {
+        (Guard::Continue, 0)
+    }
+
+    fn step(&mut self, pose: Pose, raw: &RawCounts) -> (Output, u32) {
+        let (px, py) = (pose.position.x as f32, pose.position.y as f32);
+        let h = pose.heading.signed() as f32 * (TAU / 65_536.0);
+        let t0 = clock::cycles();
+        compiler_fence(Ordering::SeqCst);
+        let (fh, fs, status) = self.planner.step(
+            self.cfg,
+            core::hint::black_box(px),
+            core::hint::black_box(py),
+            core::hint::black_box(h),
+            core::hint::black_box(raw),
+        );
+        let (fh, fs) = core::hint::black_box((fh, fs));
+        compiler_fence(Ordering::SeqCst);
+        let t1 = clock::cycles();
+        let command = Command {
+            heading: Angle((fh * (65_536.0 / TAU)) as i32 as u16),
+            step_mm: fs as u16,
+        };
+        (Output { command, status }, t1.wrapping_sub(t0))
+    }
+}
+
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
     bench::halt()
@@ -85,28 +121,8 @@ fn main() -> ! {
             continue;
         };
         let _ = uwriteln!(out, "OK");
-        let mut planner = FloatPlanner::<f32, AvrLibc>::new((x as f32, y as f32), false);
-        replay::serve(|pose, raw| {
-            let (px, py) = (pose.position.x as f32, pose.position.y as f32);
-            let h = pose.heading.signed() as f32 * (TAU / 65_536.0);
-            let t0 = clock::cycles();
-            compiler_fence(Ordering::SeqCst);
-            let (fh, fs, status) = planner.step(
-                &cfg,
-                core::hint::black_box(px),
-                core::hint::black_box(py),
-                core::hint::black_box(h),
-                core::hint::black_box(raw),
-            );
-            let (fh, fs) = core::hint::black_box((fh, fs));
-            compiler_fence(Ordering::SeqCst);
-            let t1 = clock::cycles();
-            let command = Command {
-                heading: Angle((fh * (65_536.0 / TAU)) as i32 as u16),
-                step_mm: fs as u16,
-            };
-            (Output { command, status }, t1.wrapping_sub(t0))
-        });
+        let planner = FloatPlanner::<f32, AvrLibc>::new((x as f32, y as f32), false);
+        replay::serve(&mut FloatReplay { planner, cfg: &cfg });
         let _ = uwriteln!(out, "OK");
     }
 }

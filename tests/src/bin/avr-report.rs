@@ -13,9 +13,9 @@ fn main() {
     let mut cycles = Vec::new();
     let mut mismatches = 0;
     for t in &traces {
-        for ((out, c), want) in avr.replay(t.goal, &t.frames).iter().zip(&t.outputs) {
-            mismatches += usize::from(out != want);
-            cycles.push(*c);
+        for (got, want) in avr.replay(t.goal, &t.frames).iter().zip(&t.outputs) {
+            mismatches += usize::from(got.answer != *want);
+            cycles.push(got.cycles);
         }
     }
     let peak = avr
@@ -28,7 +28,7 @@ fn main() {
     let f32_cycles: Vec<u32> = traces
         .iter()
         .flat_map(|t| float.replay(t.goal, &t.frames))
-        .map(|(_, c)| c)
+        .map(|r| r.cycles)
         .collect();
     let (_, f32_worst) = mean_worst(&f32_cycles);
     println!("avr size: text={text} data={data} bss={bss} stack_peak={peak}");
