@@ -214,9 +214,9 @@ const FLANK_LATERAL_MM: i32 = 170;
 /// a beam sliding along a face leaves the last point it saw of it.
 const FLANK_MERGE_MM: u16 = 40;
 
-/// Flank points farther than this from the rover (mm, either axis) are
-/// forgotten as it advances: beyond it the beams of any new view see the
-/// ground again.
+/// Flank points farther than this from the rover (mm, either axis) are not
+/// kept, and are forgotten as it advances: beyond it the beams of any new
+/// view see the ground again.
 const FLANK_REACH_MM: u16 = 300;
 
 /// Margin (mm) beyond the robot radius that the step keeps from a flank
