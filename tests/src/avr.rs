@@ -156,18 +156,7 @@ impl Avr {
 /// (`firmware-avr/src/replay.rs`).
 pub fn replay_frame(f: &Frame) -> Vec<u8> {
     let mut msg = vec![0xa5, f.guards.len() as u8];
-    for g in &f.guards {
-        msg.extend(g.remaining_mm.to_le_bytes());
-        for r in g.raw {
-            msg.extend(r.to_le_bytes());
-        }
-    }
-    msg.extend(f.pose.position.x.to_le_bytes());
-    msg.extend(f.pose.position.y.to_le_bytes());
-    msg.extend(f.pose.heading.0.to_le_bytes());
-    for r in f.raw {
-        msg.extend(r.to_le_bytes());
-    }
+    f.encode_le(&mut msg);
     msg
 }
 

@@ -100,11 +100,11 @@ pub struct Trace {
     pub outputs: Vec<Answer>,
 }
 
-/// The guard's samples of `f` through `planner`: the verdict bits of
-/// [`Answer::guard_stops`].
-pub fn run_guards(planner: &mut Planner, f: &Frame) -> u8 {
+/// The guard's samples `guards` (a frame's, oldest first) through
+/// `planner`: the verdict bits of [`Answer::guard_stops`].
+pub fn run_guards(planner: &mut Planner, guards: &[GuardSample]) -> u8 {
     let mut stops = 0;
-    for (i, g) in f.guards.iter().enumerate() {
+    for (i, g) in guards.iter().enumerate() {
         if planner.guard_raw(&g.raw, g.remaining_mm) == Guard::Stop {
             stops |= 1 << i;
         }
@@ -166,24 +166,40 @@ pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace 
         let step = output.command.step_mm;
         let piece = step.div_ceil(MAX_GUARD_SAMPLES as u16);
         let mut done = 0;
-        guard_stops = 0;
-        for i in 0..MAX_GUARD_SAMPLES {
-            if done >= step {
-                break;
-            }
+        while done < step && guards.len() < MAX_GUARD_SAMPLES {
             t += 0.04;
             let at = p + V2::from_angle(h) * (done as f64 / 1000.0);
             let raw = sensors.read(&world, at, h, t);
-            let remaining_mm = step - done;
-            guards.push(GuardSample { raw, remaining_mm });
-            if planner.guard_raw(&raw, remaining_mm) == Guard::Stop {
-                guard_stops |= 1 << i;
-            }
+            guards.push(GuardSample {
+                raw,
+                remaining_mm: step - done,
+            });
             done = (done + piece).min(step);
         }
+        // The rover goes the whole step whatever the guard says, so it may
+        // look at them all once the readings are taken.
+        guard_stops = run_guards(&mut planner, &guards);
         p = p + V2::from_angle(h) * (step as f64 / 1000.0);
     }
     trace
+}
+
+impl Frame {
+    /// The frame's guard samples (each the step still to go, then the five
+    /// raw counts), then the step's x, y, heading and raw counts, all
+    /// little-endian: the body both firmwares' replays read after the
+    /// number of samples (`firmware-avr/src/replay.rs`,
+    /// `firmware-stm32/src/emulated.rs`).
+    pub fn encode_le(&self, out: &mut Vec<u8>) {
+        for g in &self.guards {
+            out.extend(g.remaining_mm.to_le_bytes());
+            out.extend(g.raw.iter().flat_map(|r| r.to_le_bytes()));
+        }
+        out.extend(self.pose.position.x.to_le_bytes());
+        out.extend(self.pose.position.y.to_le_bytes());
+        out.extend(self.pose.heading.0.to_le_bytes());
+        out.extend(self.raw.iter().flat_map(|r| r.to_le_bytes()));
+    }
 }
 
 /// The traces the firmware checks replay: a trap, a paper world, a dense

@@ -20,18 +20,7 @@ pub fn encode(traces: &[Trace]) -> Vec<u8> {
         b.extend((t.frames.len() as u16).to_le_bytes());
         for f in &t.frames {
             b.extend((f.guards.len() as u16).to_le_bytes());
-            for g in &f.guards {
-                b.extend(g.remaining_mm.to_le_bytes());
-                for r in g.raw {
-                    b.extend(r.to_le_bytes());
-                }
-            }
-            b.extend(f.pose.position.x.to_le_bytes());
-            b.extend(f.pose.position.y.to_le_bytes());
-            b.extend(f.pose.heading.0.to_le_bytes());
-            for r in f.raw {
-                b.extend(r.to_le_bytes());
-            }
+            f.encode_le(&mut b);
         }
     }
     b

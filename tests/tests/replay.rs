@@ -23,7 +23,7 @@ fn replayed_trace_gives_identical_commands() {
     let mut script = ScriptedSensors::new(&frames);
     let mut with_flank = 0;
     for (f, want) in t.frames.iter().zip(&t.outputs) {
-        let guard_stops = run_guards(&mut replay, f);
+        let guard_stops = run_guards(&mut replay, &f.guards);
         with_flank += usize::from(!replay.flank().points().is_empty());
         let output = replay.step(f.pose, &mut script).unwrap();
         assert_eq!(
