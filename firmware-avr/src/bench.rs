@@ -2,8 +2,8 @@
 //! and the serial line with interrupts on, no control tick, and the default
 //! configuration; stop (spin) where the firmware would have nothing to do.
 
-use crate::{board, clock, serial};
-use planner_core::{AdcProfile, Config, ConfigBuilder};
+use crate::{board, clock, progmem, serial};
+use planner_core::Config;
 
 /// Spin for ever (a bench has no motors to stop).
 pub fn halt() -> ! {
@@ -20,8 +20,5 @@ pub fn start() -> Config {
     serial::init(&dp);
     // SAFETY: every shared static is behind an interrupt-free Mutex.
     unsafe { avr_device::interrupt::enable() };
-    let Ok(cfg) = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build() else {
-        halt()
-    };
-    cfg
+    progmem::config()
 }

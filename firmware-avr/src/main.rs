@@ -19,6 +19,7 @@ mod board;
 mod clock;
 mod encoders;
 mod motors;
+mod progmem;
 mod replay;
 mod serial;
 mod stack;
@@ -26,9 +27,7 @@ mod stack;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::protocol::{self, Request};
-use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status,
-};
+use planner_core::{Angle, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status};
 use serial::Serial;
 use ufmt::uwriteln;
 
@@ -101,13 +100,13 @@ fn replay(dp: &board::Dp, planner: &mut Planner) {
     adc::start(dp);
 }
 
-/// The planner with the default configuration. Not inlined: the config
-/// and builder temporaries then live in this frame, which is gone before
-/// `main` goes on, instead of in `main`'s for ever (RAM is 2 KB).
+/// The planner with the default configuration (from flash, see
+/// [`progmem`]). Not inlined: the configuration's copy then lives in this
+/// frame, which is gone before `main` goes on, instead of in `main`'s for
+/// ever (RAM is 2 KB).
 #[inline(never)]
-fn new_planner() -> Option<Planner> {
-    let config = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().ok()?;
-    Some(Planner::new(config, Point::new(0, 0)))
+fn new_planner() -> Planner {
+    Planner::new(progmem::config(), Point::new(0, 0))
 }
 
 #[avr_device::entry]
@@ -135,16 +134,10 @@ fn main() -> ! {
     unsafe { avr_device::interrupt::enable() };
 
     let mut out = Serial;
-    // Used in place (`as_mut`), never moved: a move is a second 900-byte
-    // copy on the stack.
-    let mut slot = new_planner();
-    let Some(planner) = slot.as_mut() else {
-        // Unreachable with the defaults; never drive with a bad config.
-        loop {
-            let _ = uwriteln!(out, "ERR config");
-            avr_device::asm::wdr();
-        }
-    };
+    // Used in place (by reference), never moved: a move is a second
+    // 900-byte copy on the stack.
+    let mut planner = new_planner();
+    let planner = &mut planner;
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());
     let mut driving = false;

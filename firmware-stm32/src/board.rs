@@ -21,7 +21,7 @@ use panic_probe as _;
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::protocol::{self, Request};
 use planner_core::sensors::OneShotSensors;
-use planner_core::{AdcProfile, Angle, ConfigBuilder, IrSensors, Planner, Point, Pose, Status};
+use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
 use stm32f4xx_hal::qei::Qei;
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
@@ -95,10 +95,7 @@ pub fn run() -> ! {
     syst.clear_current();
     syst.enable_counter();
 
-    let Ok(config) = ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3).build() else {
-        defmt::panic!("bad config")
-    };
-    let mut planner = Planner::new(config, Point::new(0, 0));
+    let mut planner = Planner::new(crate::CONFIG, Point::new(0, 0));
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());
     let mut driving = false;

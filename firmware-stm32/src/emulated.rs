@@ -19,9 +19,7 @@
 use core::sync::atomic::{compiler_fence, Ordering};
 use cortex_m::peripheral::syst::SystClkSource;
 use defmt_semihosting as _;
-use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, Guard, Planner, Point, Pose, ScriptedSensors,
-};
+use planner_core::{Angle, Guard, Planner, Point, Pose, ScriptedSensors};
 
 static TRACE: &[u8] = include_bytes!(concat!(env!("OUT_DIR"), "/trace.bin"));
 
@@ -69,14 +67,7 @@ pub fn run() -> ! {
         ticks(t0, t1).saturating_sub(overhead)
     );
 
-    let Ok(config) = ConfigBuilder::new(AdcProfile::STM32_12BIT_3V3).build() else {
-        defmt::error!("bad config");
-        cortex_m_semihosting::debug::exit(cortex_m_semihosting::debug::EXIT_FAILURE);
-        loop {
-            cortex_m::asm::wfi();
-        }
-    };
-    let mut planner = Planner::new(config, Point::new(0, 0));
+    let mut planner = Planner::new(crate::CONFIG, Point::new(0, 0));
     let raw_at = |at: usize| core::array::from_fn::<u16, 5, _>(|i| word(at + 2 * i));
     // Segments: goal x, y (i16), frame count (u16), then the frames.
     let mut at = 0;

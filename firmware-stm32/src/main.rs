@@ -30,6 +30,15 @@ mod emulated;
 #[cfg(all(feature = "board", feature = "qemu"))]
 compile_error!("choose one of the features `board` and `qemu` (use --no-default-features)");
 
+/// The planner's configuration, built and checked at compile time
+/// (`planner-core`'s builder is a `const fn`): a bad one fails the build,
+/// and the image holds the tables, not the code that computes them.
+pub const CONFIG: planner_core::Config =
+    match planner_core::ConfigBuilder::new(planner_core::AdcProfile::STM32_12BIT_3V3).build() {
+        Ok(c) => c,
+        Err(_) => panic!("the default configuration is refused"),
+    };
+
 #[cortex_m_rt::entry]
 fn main() -> ! {
     #[cfg(feature = "qemu")]

@@ -123,36 +123,41 @@ pub struct EscapeConfig {
 
 impl Default for EscapeConfig {
     fn default() -> Self {
-        EscapeConfig {
-            enabled: true,
-            window_steps: 12,
-            stuck_mm: 150,
-            crumb_mm: 400,
-            revisit_mm: 150,
-            progress_mm: 100,
-            radius_mm: 150,
-            k_v: FORCE_ONE / 10,
-            give_up_drops: 40,
-            give_up_steps: 400,
-            retreat_mm: RETREAT_MM,
-            retreat_per_drop_mm: RETREAT_PER_DROP_MM,
-        }
+        EscapeConfig::DEFAULT
     }
 }
 
 impl EscapeConfig {
+    /// The defaults (also `Default::default()`; this one is usable in a
+    /// `const`).
+    pub const DEFAULT: EscapeConfig = EscapeConfig {
+        enabled: true,
+        window_steps: 12,
+        stuck_mm: 150,
+        crumb_mm: 400,
+        revisit_mm: 150,
+        progress_mm: 100,
+        radius_mm: 150,
+        k_v: FORCE_ONE / 10,
+        give_up_drops: 40,
+        give_up_steps: 400,
+        retreat_mm: RETREAT_MM,
+        retreat_per_drop_mm: RETREAT_PER_DROP_MM,
+    };
+
     /// Whether every field is in its documented range.
-    pub fn is_valid(&self) -> bool {
-        (2..=WINDOW_CAPACITY as u16).contains(&self.window_steps)
-            && (20..=5_000).contains(&self.crumb_mm)
+    pub const fn is_valid(&self) -> bool {
+        use crate::config::in_range;
+        in_range(self.window_steps as i32, 2, WINDOW_CAPACITY as i32)
+            && in_range(self.crumb_mm as i32, 20, 5_000)
             && self.revisit_mm < self.crumb_mm
             && self.stuck_mm <= 5_000
-            && (10..=60_000).contains(&self.give_up_steps)
-            && (1..=2_000).contains(&self.progress_mm)
-            && (10..=2_000).contains(&self.radius_mm)
-            && (1..=16 * FORCE_ONE).contains(&self.k_v)
-            && (1..=1_000).contains(&self.give_up_drops)
-            && (self.retreat_mm == 0 || (10..=5_000).contains(&self.retreat_mm))
+            && in_range(self.give_up_steps as i32, 10, 60_000)
+            && in_range(self.progress_mm as i32, 1, 2_000)
+            && in_range(self.radius_mm as i32, 10, 2_000)
+            && in_range(self.k_v, 1, 16 * FORCE_ONE)
+            && in_range(self.give_up_drops as i32, 1, 1_000)
+            && (self.retreat_mm == 0 || in_range(self.retreat_mm as i32, 10, 5_000))
             && self.retreat_per_drop_mm <= 5_000
     }
 }
@@ -371,6 +376,12 @@ impl Default for Escape {
 
 impl Escape {
     /// No history.
+    ///
+    /// Always inlined: otherwise the AVR builds it in a 185-byte temporary
+    /// and copies it into the planner, and at start-up that temporary sat
+    /// on the stack beside the configuration's copy (the stack peak rose
+    /// 185 bytes, over the RAM there is; `cargo xtask avr-report`).
+    #[inline(always)]
     pub const fn new() -> Self {
         Escape {
             best_mm: u16::MAX,

@@ -87,7 +87,7 @@ impl Angle {
     /// Fifth-order polynomial `x·(a − x²·(b − x²·c))` with `a = π/2`,
     /// `b = π − 5/2`, `c = π/2 − 3/2`, exact at 0 and ±90°, maximum error
     /// about 5·10⁻⁴ (0.03° of heading); four 32-bit multiplies and no table.
-    pub fn sin(self) -> i32 {
+    pub const fn sin(self) -> i32 {
         // Fold into [−90°, 90°]: sin(180° − t) = sin(t).
         let mut s = self.signed() as i32;
         if s > 16_384 {
@@ -108,7 +108,7 @@ impl Angle {
     }
 
     /// Cosine in Q14.
-    pub fn cos(self) -> i32 {
+    pub const fn cos(self) -> i32 {
         self.add(Angle::QUARTER).sin()
     }
 
@@ -171,7 +171,7 @@ pub struct Dir {
 
 impl Dir {
     /// The direction of an angle.
-    pub fn of(a: Angle) -> Dir {
+    pub const fn of(a: Angle) -> Dir {
         Dir {
             c: a.cos(),
             s: a.sin(),
@@ -211,7 +211,7 @@ pub const MAX_SCALED: i32 = (1 << 17) - 1;
 
 /// `a · b` where one of them is Q14, rounded; `|a · b| < 2^31`.
 #[inline]
-pub fn mul_q14(a: i32, b: i32) -> i32 {
+pub const fn mul_q14(a: i32, b: i32) -> i32 {
     (a * b + (1 << 13)) >> 14
 }
 
@@ -219,7 +219,7 @@ pub fn mul_q14(a: i32, b: i32) -> i32 {
 /// range. (On the AVR it costs a full 32-bit multiply all the same: LLVM
 /// widens it to libgcc's `__mulsi3`.)
 #[inline]
-pub fn mul16(a: i16, b: i16) -> i32 {
+pub const fn mul16(a: i16, b: i16) -> i32 {
     a as i32 * b as i32
 }
 

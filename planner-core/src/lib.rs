@@ -635,7 +635,7 @@ mod tests {
     #[test]
     fn obstacle_ahead_deflects_and_shortens_the_step() {
         let mut p = planner(Point::new(3_000, 0));
-        let cal = p.config().calibration(2).unwrap().clone();
+        let cal = *p.config().calibration(2).unwrap();
         // An obstacle 300 mm ahead on the front sensor (count for ~300 mm).
         let c300 = count_for(&p, 300);
         let out = p.step_raw(at(0, 0, 0), &[0, 0, c300, 0, 0]);

@@ -24,6 +24,9 @@ pub type RawCounts = [u16; SENSOR_COUNT];
 /// Bins of a calibration table; the table has `CAL_BINS + 1` entries.
 pub const CAL_BINS: usize = 32;
 
+/// Most measured points a calibration takes.
+pub const MAX_CAL_POINTS: usize = 32;
+
 /// Bits of a bin index, and the bits below them in a 16-bit count.
 const BIN_BITS: u32 = CAL_BINS.trailing_zeros();
 const FRACTION_BITS: u32 = 16 - BIN_BITS;
@@ -70,11 +73,19 @@ impl AdcProfile {
     }
 
     /// The count the ADC reads for `mv` millivolts (rounded, saturating).
-    pub fn counts_for_mv(self, mv: u16) -> u16 {
+    pub const fn counts_for_mv(self, mv: u16) -> u16 {
         let fs = self.full_scale() as u32;
-        let vref = self.vref_mv.max(1) as u32;
+        let vref = if self.vref_mv == 0 {
+            1
+        } else {
+            self.vref_mv as u32
+        };
         let c = (mv as u32 * fs + vref / 2) / vref;
-        c.min(fs) as u16
+        if c < fs {
+            c as u16
+        } else {
+            fs as u16
+        }
     }
 }
 
@@ -86,6 +97,8 @@ pub enum CalibrationError {
     BadAdc,
     /// Fewer than two points.
     TooFewPoints,
+    /// More than [`MAX_CAL_POINTS`] points.
+    TooManyPoints,
     /// Counts must rise strictly while distances fall strictly.
     NotMonotonic,
     /// A count above the ADC's full scale.
@@ -97,7 +110,7 @@ pub enum CalibrationError {
 /// Raw count → distance for one sensor, resampled at build time onto
 /// `CAL_BINS` equal bins of counts so that a lookup is a shift and one
 /// 16-bit multiply (no division on the AVR).
-#[derive(Clone, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Calibration {
     shift: u8,
@@ -113,77 +126,97 @@ pub struct Calibration {
 impl Calibration {
     /// Build from measured `(count, mm)` points, in any order of input but
     /// strictly monotonic: a higher count is a nearer object.
-    pub fn from_points(adc: AdcProfile, points: &[(u16, u16)]) -> Result<Self, CalibrationError> {
-        if !(8..=16).contains(&adc.bits) || adc.vref_mv == 0 {
+    ///
+    /// A `const fn`, so that a firmware's tables can be built and checked
+    /// at compile time (hence the plain loops).
+    pub const fn from_points(
+        adc: AdcProfile,
+        points: &[(u16, u16)],
+    ) -> Result<Self, CalibrationError> {
+        if adc.bits < 8 || adc.bits > 16 || adc.vref_mv == 0 {
             return Err(CalibrationError::BadAdc);
         }
         if points.len() < 2 {
             return Err(CalibrationError::TooFewPoints);
         }
+        if points.len() > MAX_CAL_POINTS {
+            return Err(CalibrationError::TooManyPoints);
+        }
         let full_scale = adc.full_scale();
-        for &(c, mm) in points {
-            if c > full_scale {
+        // Points sorted by count (insertion sort, build time only):
+        // ascending counts must have descending mm.
+        let mut sorted = [(0u16, 0u16); MAX_CAL_POINTS];
+        let n = points.len();
+        let mut i = 0;
+        while i < n {
+            let p = points[i];
+            if p.0 > full_scale {
                 return Err(CalibrationError::CountOutOfRange);
             }
-            if !(20..=2_000).contains(&mm) {
+            if p.1 < 20 || p.1 > 2_000 {
                 return Err(CalibrationError::DistanceOutOfRange);
             }
-        }
-        // Points sorted by count: ascending counts must have descending mm.
-        let mut sorted: heapless::Vec<(u16, u16), 32> = heapless::Vec::new();
-        for &p in points.iter().take(32) {
-            // Insertion sort into the bounded buffer (build time only).
-            let pos = sorted
-                .iter()
-                .position(|q| q.0 > p.0)
-                .unwrap_or(sorted.len());
-            if sorted.insert(pos, p).is_err() {
-                return Err(CalibrationError::TooFewPoints);
+            let mut j = i;
+            while j > 0 && sorted[j - 1].0 > p.0 {
+                sorted[j] = sorted[j - 1];
+                j -= 1;
             }
+            sorted[j] = p;
+            i += 1;
         }
-        for (a, b) in sorted.iter().zip(sorted.iter().skip(1)) {
+        let mut k = 1;
+        while k < n {
+            let (a, b) = (sorted[k - 1], sorted[k]);
             if a.0 >= b.0 || a.1 <= b.1 {
                 return Err(CalibrationError::NotMonotonic);
             }
+            k += 1;
         }
-        // (Indexing below goes through `get`: no panicking path, even where
-        // the length checks above already make it impossible.)
-        let (Some(&first), Some(&last)) = (sorted.first(), sorted.last()) else {
-            return Err(CalibrationError::TooFewPoints);
-        };
         let shift = adc.bits - (CAL_BINS.trailing_zeros() as u8);
         let mut mm = [0u16; CAL_BINS + 1];
-        for (i, slot) in mm.iter_mut().enumerate() {
+        let mut i = 0;
+        while i <= CAL_BINS {
             let c = (i as i32) << shift;
             // The segment containing c, or the end segment to extrapolate.
-            let k = sorted
-                .iter()
-                .skip(1)
-                .position(|q| c <= q.0 as i32)
-                .unwrap_or(sorted.len().saturating_sub(2));
-            let (Some(&(c0, d0)), Some(&(c1, d1))) = (sorted.get(k), sorted.get(k + 1)) else {
-                return Err(CalibrationError::TooFewPoints);
-            };
+            let mut k = 1;
+            while k < n - 1 && c > sorted[k].0 as i32 {
+                k += 1;
+            }
+            let ((c0, d0), (c1, d1)) = (sorted[k - 1], sorted[k]);
             let (c0, d0, c1, d1) = (c0 as i32, d0 as i32, c1 as i32, d1 as i32);
             let num = (c - c0) * (d1 - d0);
             let den = c1 - c0; // > 0: strictly increasing counts
-            let d = d0 + (2 * num + den).checked_div(2 * den).unwrap_or(0);
-            *slot = d.clamp(0, 4_000) as u16;
+            let d = d0
+                + match (2 * num + den).checked_div(2 * den) {
+                    Some(q) => q,
+                    None => 0,
+                };
+            mm[i] = if d < 0 {
+                0
+            } else if d > 4_000 {
+                4_000
+            } else {
+                d as u16
+            };
+            i += 1;
         }
         Ok(Calibration {
             shift,
             full_scale,
-            near_count: last.0,
-            far_count: first.0,
+            near_count: sorted[n - 1].0,
+            far_count: sorted[0].0,
             mm,
         })
     }
 
     /// The GP2Y0A21YK0F datasheet curve for an ADC (ALGORITHMS.md §5).
-    pub fn gp2y0a21(adc: AdcProfile) -> Result<Self, CalibrationError> {
+    pub const fn gp2y0a21(adc: AdcProfile) -> Result<Self, CalibrationError> {
         let mut pts = [(0u16, 0u16); GP2Y0A21_MV_MM.len()];
-        for (p, &(mv, mm)) in pts.iter_mut().zip(GP2Y0A21_MV_MM.iter()) {
-            *p = (adc.counts_for_mv(mv), mm);
+        let mut i = 0;
+        while i < pts.len() {
+            let (mv, mm) = GP2Y0A21_MV_MM[i];
+            pts[i] = (adc.counts_for_mv(mv), mm);
+            i += 1;
         }
         Calibration::from_points(adc, &pts)
     }
@@ -560,6 +593,13 @@ mod tests {
             Calibration::from_points(adc, &[(100, 5_000), (200, 100)]),
             Err(CalibrationError::DistanceOutOfRange)
         );
+        let many: [(u16, u16); MAX_CAL_POINTS + 1] =
+            core::array::from_fn(|i| (10 * i as u16, 1_000 - 10 * i as u16));
+        assert_eq!(
+            Calibration::from_points(adc, &many),
+            Err(CalibrationError::TooManyPoints)
+        );
+        assert!(Calibration::from_points(adc, &many[..MAX_CAL_POINTS]).is_ok());
         let bad = AdcProfile {
             bits: 20,
             vref_mv: 5_000,

@@ -50,7 +50,7 @@ struct Stats {
 }
 
 fn compare(c: &Config, goal: (i16, i16), cycles: &[((i16, i16, u16), [u16; 5])], st: &mut Stats) {
-    let mut fixed = Planner::new(c.clone(), Point::new(goal.0, goal.1));
+    let mut fixed = Planner::new(*c, Point::new(goal.0, goal.1));
     let mut float = FloatPlanner::<f64>::new((goal.0 as f64, goal.1 as f64), true);
     for &((x, y, h), raw) in cycles {
         let pose = Pose {

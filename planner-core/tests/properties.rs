@@ -34,7 +34,7 @@ proptest! {
         let cfg = ConfigBuilder::new(adc).build().unwrap();
         let range = cfg.sensor_range_mm();
         let half = cfg.sector_half_width();
-        let mut p = Planner::new(cfg.clone(), Point::new(goal.0, goal.1));
+        let mut p = Planner::new(cfg, Point::new(goal.0, goal.1));
         for (pose, raw) in cycles {
             let out = p.step_raw(pose, &raw);
             let step = out.command.step_mm;

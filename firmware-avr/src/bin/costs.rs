@@ -26,6 +26,8 @@ mod board;
 #[path = "../clock.rs"]
 #[allow(dead_code)]
 mod clock;
+#[path = "../progmem.rs"]
+mod progmem;
 #[path = "../serial.rs"]
 #[allow(dead_code)]
 mod serial;

@@ -15,6 +15,8 @@ mod board;
 #[path = "../clock.rs"]
 #[allow(dead_code)]
 mod clock;
+#[path = "../progmem.rs"]
+mod progmem;
 #[path = "../replay.rs"]
 mod replay;
 #[path = "../serial.rs"]
