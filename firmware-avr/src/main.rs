@@ -176,7 +176,7 @@ fn main() -> ! {
                     motors::set(&dp, Wheels::STOP);
                 }
                 Some(Request::Memory) => {
-                    let _ = uwriteln!(out, "M stack_peak={}", stack::peak());
+                    let _ = uwriteln!(out, "M stack_peak={}", stack::peak() as u32);
                     continue;
                 }
                 Some(Request::Replay(x, y)) if !driving => {
@@ -212,12 +212,14 @@ fn main() -> ! {
                 out,
                 "T {} {} {} {} {} {} {} {}",
                 now,
-                pose.position.x,
-                pose.position.y,
-                pose.heading.0,
+                // Two integer widths only (u32, i32): ufmt links one
+                // formatter per type, ~220 bytes of flash each.
+                pose.position.x as i32,
+                pose.position.y as i32,
+                pose.heading.0 as u32,
                 status_letter(step.status),
-                step.command.heading.0,
-                step.command.step_mm,
+                step.command.heading.0 as u32,
+                step.command.step_mm as u32,
                 cycles
             );
             if step.status != Status::Moving {
