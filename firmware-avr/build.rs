@@ -16,14 +16,17 @@
 //! their strong definitions win. Same calling convention (LLVM's AVR backend
 //! calls these with avr-gcc's), same results (C's truncating division, as
 //! Rust's; the C library's copies).
+//!
+//! The unsigned division itself is libgcc's loop with the iterations
+//! skipped whose quotient bit is known to be 0 (`asm/udivmodsi4.S`,
+//! assembled here by avr-gcc): the planner's divisors are two or three
+//! bytes long, so its divisions take 16 or 24 iterations instead of 32.
+//! libgcc's signed division calls it.
 use std::{env, path::PathBuf, process::Command};
 
 /// (what `avr-gcc -print-file-name` is asked for, the members taken from it)
 const ARCHIVES: [(&str, &[&str]); 2] = [
-    (
-        "-print-libgcc-file-name",
-        &["_divmodsi4.o", "_udivmodsi4.o", "_negsi2.o"],
-    ),
+    ("-print-libgcc-file-name", &["_divmodsi4.o", "_negsi2.o"]),
     (
         "-print-file-name=libc.a",
         &["memcpy.o", "memmove.o", "memset.o"],
@@ -62,4 +65,16 @@ fn main() {
             println!("cargo:rustc-link-arg={}", out.join(member).display());
         }
     }
+    println!("cargo:rerun-if-changed=asm/udivmodsi4.S");
+    let udiv = out.join("udivmodsi4.o");
+    let status = Command::new("avr-gcc")
+        .args(["-mmcu=atmega328p", "-c", "asm/udivmodsi4.S", "-o"])
+        .arg(&udiv)
+        .status()
+        .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
+    assert!(
+        status.success(),
+        "avr-gcc could not assemble asm/udivmodsi4.S"
+    );
+    println!("cargo:rustc-link-arg={}", udiv.display());
 }

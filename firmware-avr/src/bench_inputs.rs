@@ -27,3 +27,48 @@ pub const VO_PROBE: Point = Point::new(575, -200);
 pub fn creep(escape: &mut Escape, cfg: &EscapeConfig, k: i16) {
     let _ = escape.observe(cfg, Point::new(50 * (k / 12), 0), 5_000);
 }
+
+/// How many divisions the division sweep checks.
+pub const DIV_SWEEP: u32 = 4_000;
+
+/// The sweep's case `k`: a pseudo-random dividend and divisor, the
+/// dividend one to four bytes long and the divisor four to one (in turn,
+/// so that every entry of the AVR's division, `firmware-avr/asm/
+/// udivmodsi4.S`, is taken), and the edges of each entry first.
+pub fn div_case(k: u32) -> (u32, u32) {
+    const EDGES: [(u32, u32); 10] = [
+        (u32::MAX, 1),
+        (u32::MAX, u32::MAX),
+        (u32::MAX, 0xff),
+        (u32::MAX, 0x100),
+        (u32::MAX, 0xffff),
+        (u32::MAX, 0x1_0000),
+        (u32::MAX, 0xff_ffff),
+        (u32::MAX, 0x100_0000),
+        (0x00ff_ffff, 0x100_0000),
+        (0, 0x100_0000),
+    ];
+    if let Some(&edge) = EDGES.get(k as usize) {
+        return edge;
+    }
+    let mix = |x: u32| {
+        let x = x.wrapping_mul(0x9e37_79b1);
+        x ^ (x >> 15)
+    };
+    let n = mix(k) >> (8 * (k / 4 % 4));
+    let d = mix(n ^ k ^ 0x5bd1_e995) >> (8 * (k % 4));
+    (n, d.max(1))
+}
+
+/// What the sweep answers: the count and two checksums, of the quotients
+/// and of the remainders.
+pub fn div_sweep(div: impl Fn(u32, u32) -> (u32, u32)) -> (u32, u32) {
+    let (mut q_sum, mut r_sum) = (0u32, 0u32);
+    for k in 0..DIV_SWEEP {
+        let (n, d) = div_case(k);
+        let (q, r) = div(n, d);
+        q_sum = q_sum.rotate_left(5) ^ q;
+        r_sum = r_sum.rotate_left(5) ^ r;
+    }
+    (q_sum, r_sum)
+}

@@ -24,6 +24,10 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
     match name {
         "nothing" => (a, 0),
         "div_u32" => ((a as u32 / b as u32) as i32, 0),
+        "div_sweep" => {
+            let (q, r) = bench_inputs::div_sweep(|n, d| (n / d, n % d));
+            (q as i32, r as i32)
+        }
         "mul_i32" => (a.wrapping_mul(b), 0),
         "isqrt" => (isqrt(a as u32) as i32, 0),
         "hypot" => (hypot(a, b) as i32, 0),

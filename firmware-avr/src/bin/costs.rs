@@ -84,6 +84,13 @@ fn main() -> ! {
         let t = timed(overhead, &mut || ((black_box(a) / black_box(b)) as i32, 0));
         report("div_u32", a as i32, b as i32, t);
     }
+    // Every entry of the division against the host's (the cycles are
+    // the sweep's, all of it).
+    let t = timed(overhead, &mut || {
+        let (q, r) = bench_inputs::div_sweep(|n, d| (black_box(n) / d, black_box(n) % d));
+        (q as i32, r as i32)
+    });
+    report("div_sweep", bench_inputs::DIV_SWEEP as i32, 0, t);
     for (a, b) in [(123_456i32, -789i32), (46_341, 46_340)] {
         let t = timed(overhead, &mut || {
             (black_box(a).wrapping_mul(black_box(b)), 0)
