@@ -21,7 +21,8 @@
 //! skipped whose quotient bit is known to be 0 (`asm/udivmodsi4.S`,
 //! assembled here by avr-gcc): the planner's divisors are two or three
 //! bytes long, so its divisions take 16 or 24 iterations instead of 32.
-//! libgcc's signed division calls it.
+//! libgcc's signed division calls it. The 32-bit multiply (`asm/mulsi3.S`)
+//! is libgcc's without its nested calls.
 use std::{env, path::PathBuf, process::Command};
 
 /// (what `avr-gcc -print-file-name` is asked for, the members taken from it)
@@ -32,6 +33,9 @@ const ARCHIVES: [(&str, &[&str]); 2] = [
         &["memcpy.o", "memmove.o", "memset.o"],
     ),
 ];
+
+/// Our own routines (`asm/NAME.S`), linked in place of libgcc's.
+const ASSEMBLED: [&str; 2] = ["udivmodsi4", "mulsi3"];
 
 /// What to run when avr-gcc or one of its libraries is missing.
 const INSTALL: &str =
@@ -65,16 +69,35 @@ fn main() {
             println!("cargo:rustc-link-arg={}", out.join(member).display());
         }
     }
-    println!("cargo:rerun-if-changed=asm/udivmodsi4.S");
-    let udiv = out.join("udivmodsi4.o");
-    let status = Command::new("avr-gcc")
-        .args(["-mmcu=atmega328p", "-c", "asm/udivmodsi4.S", "-o"])
-        .arg(&udiv)
+    // Our routines as a static library, which the linker reads before
+    // libgcc (link-arg objects come after it, and an object defining a
+    // symbol that libgcc already gave would clash).
+    let mut objects = Vec::new();
+    for name in ASSEMBLED {
+        let source = format!("asm/{name}.S");
+        println!("cargo:rerun-if-changed={source}");
+        let object = out.join(format!("{name}.o"));
+        let status = Command::new("avr-gcc")
+            .args(["-mmcu=atmega328p", "-c", &source, "-o"])
+            .arg(&object)
+            .status()
+            .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
+        assert!(status.success(), "avr-gcc could not assemble {source}");
+        objects.push(object);
+    }
+    let archive = out.join("libroverasm.a");
+    let _ = std::fs::remove_file(&archive);
+    let status = Command::new("avr-ar")
+        .arg("rcs")
+        .arg(&archive)
+        .args(&objects)
         .status()
-        .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
+        .unwrap_or_else(|e| panic!("avr-ar (binutils-avr) not found ({e}): {INSTALL}"));
     assert!(
         status.success(),
-        "avr-gcc could not assemble asm/udivmodsi4.S"
+        "avr-ar could not build {}",
+        archive.display()
     );
-    println!("cargo:rustc-link-arg={}", udiv.display());
+    println!("cargo:rustc-link-search=native={}", out.display());
+    println!("cargo:rustc-link-lib=static=roverasm");
 }

@@ -13,8 +13,8 @@
 ; (the last of them), 33-k passes left. Same results as
 ; libgcc's for every input (the `costs` bench checks 4,000 divisions
 ; through every entry against the host's; the firmware's replays, bit for
-; bit). The planner step: mean 17,661 -> 17,122 cycles, worst 40,885 ->
-; 39,077 (`cargo xtask avr-report`).
+; bit). The planner step, when it was written: mean 17,661 -> 17,122 cycles,
+; worst 40,885 -> 39,077 (`cargo xtask avr-report`).
 
 	.section .text.libgcc.div,"ax",@progbits
 	.global	__udivmodsi4

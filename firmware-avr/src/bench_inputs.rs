@@ -72,3 +72,23 @@ pub fn div_sweep(div: impl Fn(u32, u32) -> (u32, u32)) -> (u32, u32) {
     }
     (q_sum, r_sum)
 }
+
+/// How many multiplies the multiply sweep checks.
+pub const MUL_SWEEP: u32 = 4_000;
+
+/// The multiply sweep's answer: a checksum of the 32-bit products of
+/// pseudo-random operands of one to four bytes each (signed and unsigned
+/// are the same bits).
+pub fn mul_sweep(mul: impl Fn(u32, u32) -> u32) -> u32 {
+    let mix = |x: u32| {
+        let x = x.wrapping_mul(0x9e37_79b1);
+        x ^ (x >> 15)
+    };
+    let mut sum = mul(u32::MAX, u32::MAX);
+    for k in 0..MUL_SWEEP {
+        let a = mix(k) >> (8 * (k % 4));
+        let b = mix(a ^ 0x5bd1_e995) >> (8 * (k / 4 % 4));
+        sum = sum.rotate_left(5) ^ mul(a, b);
+    }
+    sum
+}

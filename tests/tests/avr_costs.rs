@@ -29,6 +29,7 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
             (q as i32, r as i32)
         }
         "mul_i32" => (a.wrapping_mul(b), 0),
+        "mul_sweep" => (bench_inputs::mul_sweep(|a, b| a.wrapping_mul(b)) as i32, 0),
         "isqrt" => (isqrt(a as u32) as i32, 0),
         "hypot" => (hypot(a, b) as i32, 0),
         "atan2" => (Angle::atan2(a, b).0 as i32, 0),

@@ -6,7 +6,7 @@
 //! Two budgets are not met yet and their tests are ignored with the reason
 //! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
 //! the step costs tens of thousands of cycles (32-bit arithmetic compiles
-//! to long AVR sequences: a 32-bit division ~710 cycles, a square root up
+//! to long AVR sequences: a 32-bit division ~600 cycles, a square root up
 //! to ~1,200, a virtual obstacle in reach ~1,800; `avr_costs.rs` prints
 //! them), and the firmware is ~28 KB of flash.
 
@@ -81,7 +81,7 @@ fn ram_within_budget() {
 }
 
 #[test]
-#[ignore = "not met: the step costs ~17,700 cycles on average, ~39,100 at worst (issue 5 stays open)"]
+#[ignore = "not met: the step costs ~15,500 cycles on average, ~35,100 at worst (issue 5 stays open)"]
 fn step_within_cycle_budget() {
     let (_, cycles, _) = replayed();
     let (_, worst) = mean_worst(cycles);
@@ -120,7 +120,9 @@ fn firmware_has_no_panicking_paths() {
 /// iterations skipped, `firmware-avr/asm/udivmodsi4.S`), not
 /// compiler-builtins' slower generic ones (`firmware-avr/build.rs`):
 /// `__udivmodsi4` is a strong symbol and the generic `u32_div_rem` is not
-/// linked; avr-libc's memory copies likewise. (The signed division and `memmove` are linked only if
+/// linked; avr-libc's memory copies likewise.
+/// It multiplies with the firmware's flat `__mulsi3` (`asm/mulsi3.S`), not
+/// libgcc's, which calls `__muluhisi3`. (The signed division and `memmove` are linked only if
 /// something needs them: since the configuration is built at compile time,
 /// nothing does; when they are, they must be libgcc's and avr-libc's.)
 #[test]
@@ -132,7 +134,14 @@ fn firmware_links_libgcc_division_and_libc_copies() {
     let symbols = String::from_utf8_lossy(&out.stdout);
     let strong = |name: &str| symbols.lines().any(|l| l.ends_with(&format!(" T {name}")));
     let linked = |name: &str| symbols.lines().any(|l| l.ends_with(&format!(" {name}")));
-    assert!(strong("__udivmodsi4"), "the AVR division routine not linked");
+    assert!(
+        strong("__udivmodsi4"),
+        "the AVR division routine not linked"
+    );
+    assert!(
+        strong("__mulsi3") && !linked("__muluhisi3"),
+        "libgcc's nested multiply linked, not asm/mulsi3.S"
+    );
     assert!(
         !symbols.contains("u32_div_rem"),
         "compiler-builtins' generic division is still linked"

@@ -1,7 +1,8 @@
 //! The `costs` bench: what the planner step's parts cost on the ATmega328P.
 //!
 //! Times the fixed-point primitives the step is built of (a 32-bit
-//! division and multiply, the square root, `hypot`, `atan2`, the sine,
+//! division and multiply, and sweeps of each through every path of the
+//! firmware's own routines, `asm/`, the square root, `hypot`, `atan2`, the sine,
 //! `1/d²`, the free-distance rule) and the virtual obstacles' force with
 //! 1 to 24 obstacles in reach (the escape's capacity), each on fixed
 //! inputs, and prints one line per call: `C name a b result_x result_y
@@ -91,6 +92,11 @@ fn main() -> ! {
         (q as i32, r as i32)
     });
     report("div_sweep", bench_inputs::DIV_SWEEP as i32, 0, t);
+    let t = timed(overhead, &mut || {
+        let p = bench_inputs::mul_sweep(|a, b| black_box(a).wrapping_mul(b));
+        (p as i32, 0)
+    });
+    report("mul_sweep", bench_inputs::MUL_SWEEP as i32, 0, t);
     for (a, b) in [(123_456i32, -789i32), (46_341, 46_340)] {
         let t = timed(overhead, &mut || {
             (black_box(a).wrapping_mul(black_box(b)), 0)

@@ -1,0 +1,48 @@
+; __mulsi3: the low 32 bits of a 32 x 32-bit product on the ATmega328P
+; (a in r22..r25, b in r18..r21, product out in r22..r25), with libgcc's
+; calling convention and register use (r26, r27 and r0 clobbered, r1 left
+; zero, r18..r21 and r30, r31 kept), without libgcc's nested calls: its
+; __mulsi3 pushes two bytes and calls __muluhisi3, which calls __umulhisi3.
+; Here the ten 8 x 8-bit products that reach the low 32 bits are summed
+; in place: a2 b0, a2 b1 and a3 b0 first (into bytes 2 and 3, where a2 and
+; a3 were), then those of a0 and a1 (kept in r26, r27). The same product,
+; wrapping, for signed and unsigned operands; the `costs` bench checks a
+; sweep against the host's.
+
+	.section .text.libgcc.mul,"ax",@progbits
+	.global	__mulsi3
+	.type	__mulsi3, @function
+__mulsi3:
+	movw	r26, r22		; a0, a1
+	mul	r25, r18		; a3 b0 -> byte 3
+	mov	r25, r0
+	mul	r24, r19		; a2 b1 -> byte 3
+	add	r25, r0
+	mul	r24, r18		; a2 b0 -> bytes 2, 3
+	mov	r24, r0
+	add	r25, r1
+	mul	r26, r18		; a0 b0 -> bytes 0, 1
+	movw	r22, r0
+	mul	r26, r19		; a0 b1 -> bytes 1, 2 (carry to 3)
+	add	r23, r0
+	adc	r24, r1
+	eor	r1, r1
+	adc	r25, r1
+	mul	r27, r18		; a1 b0 -> bytes 1, 2 (carry to 3)
+	add	r23, r0
+	adc	r24, r1
+	eor	r1, r1
+	adc	r25, r1
+	mul	r26, r20		; a0 b2 -> bytes 2, 3
+	add	r24, r0
+	adc	r25, r1
+	mul	r27, r19		; a1 b1 -> bytes 2, 3
+	add	r24, r0
+	adc	r25, r1
+	mul	r26, r21		; a0 b3 -> byte 3
+	add	r25, r0
+	mul	r27, r20		; a1 b2 -> byte 3
+	add	r25, r0
+	eor	r1, r1
+	ret
+	.size	__mulsi3, .-__mulsi3
