@@ -4,29 +4,35 @@
 ; r22..r25; uses r26, r27, r30, r31 and r1, left zero), and one change:
 ; the iterations whose quotient bit is known to be 0 are skipped.
 ;
-; If the divisor is at least 2^k (k = 8, 16, 24: its top non-zero byte),
-; the first k iterations only shift the dividend's top k bits into the
-; remainder, which stays below 2^k <= divisor: no subtraction, quotient bit
-; 0 each time. So the loop can start there: remainder = dividend >> (32-k),
-; the shifted dividend (n << k) with the k-1 inverted quotient bits (ones)
-; below it (and under them a bit the last pass shifts out unread), carry 1
-; (the last of them), 33-k passes left. Same results as
-; libgcc's for every input (the `costs` bench checks 4,000 divisions
-; through every entry against the host's; the firmware's replays, bit for
-; bit). The planner step, when it was written: mean 17,661 -> 17,122 cycles,
-; worst 40,885 -> 39,077 (`cargo xtask avr-report`).
+; If the quotient is below 2^(32-k) (k = 24, 16, 8), that is if
+; dividend >> (32-k) < divisor, the first k iterations only shift the
+; dividend's top k bits into the remainder, which stays below the divisor:
+; no subtraction, quotient bit 0 each time. So the loop can start there:
+; remainder = dividend >> (32-k), the shifted dividend (n << k) with the
+; k-1 inverted quotient bits (ones) below it (and under them a bit the
+; last pass shifts out unread), carry 1 (the last of them), 33-k passes
+; left. One compare per k picks the largest. Same results as libgcc's for
+; every input (the `costs` bench checks 4,000 divisions through every
+; entry against the host's; the firmware's replays, bit for bit). The
+; planner's quotients mostly have 16 bits or fewer: 16 iterations, not 32.
 
 	.section .text.libgcc.div,"ax",@progbits
 	.global	__udivmodsi4
 	.type	__udivmodsi4, @function
 __udivmodsi4:
-	tst	r21
-	brne	.Lskip24
-	tst	r20
-	brne	.Lskip16
-	tst	r19
-	brne	.Lskip8
-	; A one-byte divisor: all 32 iterations, as libgcc.
+	cp	r23, r18		; dividend >> 8 < divisor: quotient < 2^8
+	cpc	r24, r19
+	cpc	r25, r20
+	cpc	r1, r21			; (r1 is 0)
+	brlo	.Lskip24
+	cp	r24, r18		; dividend >> 16 < divisor: quotient < 2^16
+	cpc	r25, r19		; (the divisor is below 2^24 here: r21 is 0)
+	cpc	r1, r20
+	brlo	.Lskip16
+	cp	r25, r18		; dividend >> 24 < divisor: quotient < 2^24
+	cpc	r1, r19			; (the divisor is below 2^16 here)
+	brlo	.Lskip8
+	; All 32 iterations, as libgcc.
 	ldi	r26, 33
 	mov	r1, r26
 	sub	r26, r26		; remainder 0, carry 0
