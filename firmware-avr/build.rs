@@ -53,18 +53,11 @@ fn main() {
             .output()
             .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
         let archive = String::from_utf8(archive.stdout).expect("avr-gcc printed a path");
-        let status = Command::new("avr-ar")
+        run(Command::new("avr-ar")
             .arg("x")
             .arg(archive.trim())
             .args(members)
-            .current_dir(&out)
-            .status()
-            .unwrap_or_else(|e| panic!("avr-ar (binutils-avr) not found ({e}): {INSTALL}"));
-        assert!(
-            status.success(),
-            "avr-ar could not extract {members:?} from {}: {INSTALL}",
-            archive.trim()
-        );
+            .current_dir(&out));
         for member in members {
             println!("cargo:rustc-link-arg={}", out.join(member).display());
         }
@@ -77,27 +70,26 @@ fn main() {
         let source = format!("asm/{name}.S");
         println!("cargo:rerun-if-changed={source}");
         let object = out.join(format!("{name}.o"));
-        let status = Command::new("avr-gcc")
+        run(Command::new("avr-gcc")
             .args(["-mmcu=atmega328p", "-c", &source, "-o"])
-            .arg(&object)
-            .status()
-            .unwrap_or_else(|e| panic!("avr-gcc not found ({e}): {INSTALL}"));
-        assert!(status.success(), "avr-gcc could not assemble {source}");
+            .arg(&object));
         objects.push(object);
     }
     let archive = out.join("libroverasm.a");
     let _ = std::fs::remove_file(&archive);
-    let status = Command::new("avr-ar")
+    run(Command::new("avr-ar")
         .arg("rcs")
         .arg(&archive)
-        .args(&objects)
-        .status()
-        .unwrap_or_else(|e| panic!("avr-ar (binutils-avr) not found ({e}): {INSTALL}"));
-    assert!(
-        status.success(),
-        "avr-ar could not build {}",
-        archive.display()
-    );
+        .args(&objects));
     println!("cargo:rustc-link-search=native={}", out.display());
     println!("cargo:rustc-link-lib=static=roverasm");
+}
+
+/// Run one of avr-gcc's tools; stop the build with what to install if it
+/// is missing or fails.
+fn run(cmd: &mut Command) {
+    let status = cmd
+        .status()
+        .unwrap_or_else(|e| panic!("{cmd:?}: {e}: {INSTALL}"));
+    assert!(status.success(), "{cmd:?} failed: {INSTALL}");
 }

@@ -9,6 +9,25 @@
 ; wrapping, for signed and unsigned operands; the `costs` bench checks a
 ; sweep against the host's.
 
+; One 8 x 8-bit product added at bytes 1 and 2 (its carry into byte 3;
+; r1 cleared to be the zero), at bytes 2 and 3, or its low byte at byte 3.
+	.macro	at12 a, b
+	mul	\a, \b
+	add	r23, r0
+	adc	r24, r1
+	eor	r1, r1
+	adc	r25, r1
+	.endm
+	.macro	at23 a, b
+	mul	\a, \b
+	add	r24, r0
+	adc	r25, r1
+	.endm
+	.macro	at3 a, b
+	mul	\a, \b
+	add	r25, r0
+	.endm
+
 	.section .text.libgcc.mul,"ax",@progbits
 	.global	__mulsi3
 	.type	__mulsi3, @function
@@ -23,26 +42,12 @@ __mulsi3:
 	add	r25, r1
 	mul	r26, r18		; a0 b0 -> bytes 0, 1
 	movw	r22, r0
-	mul	r26, r19		; a0 b1 -> bytes 1, 2 (carry to 3)
-	add	r23, r0
-	adc	r24, r1
-	eor	r1, r1
-	adc	r25, r1
-	mul	r27, r18		; a1 b0 -> bytes 1, 2 (carry to 3)
-	add	r23, r0
-	adc	r24, r1
-	eor	r1, r1
-	adc	r25, r1
-	mul	r26, r20		; a0 b2 -> bytes 2, 3
-	add	r24, r0
-	adc	r25, r1
-	mul	r27, r19		; a1 b1 -> bytes 2, 3
-	add	r24, r0
-	adc	r25, r1
-	mul	r26, r21		; a0 b3 -> byte 3
-	add	r25, r0
-	mul	r27, r20		; a1 b2 -> byte 3
-	add	r25, r0
+	at12	r26, r19		; a0 b1
+	at12	r27, r18		; a1 b0
+	at23	r26, r20		; a0 b2
+	at23	r27, r19		; a1 b1
+	at3	r26, r21		; a0 b3
+	at3	r27, r20		; a1 b2
 	eor	r1, r1
 	ret
 	.size	__mulsi3, .-__mulsi3
