@@ -19,9 +19,9 @@
 //!
 //! The unsigned division itself is libgcc's loop with the iterations
 //! skipped whose quotient bit is known to be 0 (`asm/udivmodsi4.S`,
-//! assembled here by avr-gcc): the planner's divisors are two or three
-//! bytes long, so its divisions take 16 or 24 iterations instead of 32.
-//! libgcc's signed division calls it. The 32-bit multiply (`asm/mulsi3.S`)
+//! assembled here by avr-gcc): most of the planner's quotients have 16 bits
+//! or fewer, so its divisions take 16 iterations instead of 32. libgcc's
+//! signed division calls it. The 32-bit multiply (`asm/mulsi3.S`)
 //! is libgcc's without its nested calls.
 use std::{env, path::PathBuf, process::Command};
 

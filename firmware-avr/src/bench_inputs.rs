@@ -28,6 +28,12 @@ pub fn creep(escape: &mut Escape, cfg: &EscapeConfig, k: i16) {
     let _ = escape.observe(cfg, Point::new(50 * (k / 12), 0), 5_000);
 }
 
+/// The sweeps' pseudo-random numbers: a multiplicative hash of `x`.
+fn mix(x: u32) -> u32 {
+    let x = x.wrapping_mul(0x9e37_79b1);
+    x ^ (x >> 15)
+}
+
 /// How many divisions the division sweep checks.
 pub const DIV_SWEEP: u32 = 4_000;
 
@@ -51,17 +57,13 @@ pub fn div_case(k: u32) -> (u32, u32) {
     if let Some(&edge) = EDGES.get(k as usize) {
         return edge;
     }
-    let mix = |x: u32| {
-        let x = x.wrapping_mul(0x9e37_79b1);
-        x ^ (x >> 15)
-    };
     let n = mix(k) >> (8 * (k / 4 % 4));
     let d = mix(n ^ k ^ 0x5bd1_e995) >> (8 * (k % 4));
     (n, d.max(1))
 }
 
-/// What the sweep answers: the count and two checksums, of the quotients
-/// and of the remainders.
+/// What the division sweep answers: a checksum of the quotients and one
+/// of the remainders.
 pub fn div_sweep(div: impl Fn(u32, u32) -> (u32, u32)) -> (u32, u32) {
     let (mut q_sum, mut r_sum) = (0u32, 0u32);
     for k in 0..DIV_SWEEP {
@@ -80,10 +82,6 @@ pub const MUL_SWEEP: u32 = 4_000;
 /// pseudo-random operands of one to four bytes each (signed and unsigned
 /// are the same bits).
 pub fn mul_sweep(mul: impl Fn(u32, u32) -> u32) -> u32 {
-    let mix = |x: u32| {
-        let x = x.wrapping_mul(0x9e37_79b1);
-        x ^ (x >> 15)
-    };
     let mut sum = mul(u32::MAX, u32::MAX);
     for k in 0..MUL_SWEEP {
         let a = mix(k) >> (8 * (k % 4));

@@ -135,7 +135,7 @@ fn main() -> ! {
 
     let mut out = Serial;
     // Used in place (by reference), never moved: a move is a second
-    // 900-byte copy on the stack.
+    // 1 KB copy on the stack.
     let mut planner = new_planner();
     let planner = &mut planner;
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
@@ -230,7 +230,7 @@ fn main() -> ! {
             }
             executor.start(step.command);
         }
-        // A guard look costs 8,900 cycles on average and 18,200 at most on
+        // A guard look costs 7,900 cycles on average and 16,200 at most on
         // the replayed advances (it also keeps the flank points; printed by
         // `cargo test --release -p rover-tests --test avr_firmware -- --nocapture`),
         // about one control tick: run it every GUARD_PERIOD_MS on fresh

@@ -459,7 +459,6 @@ mod tests {
             Angle::from_deg(-50),
         );
         assert!((turned as i32 - 20).abs() <= 2, "{turned}");
-        // Kept while near, forgotten beyond 300 mm.
         // Kept while the rover is near (a new advance, 800 then 900 mm
         // along), forgotten beyond 300 mm.
         f.start(Angle::ZERO, 1_000);

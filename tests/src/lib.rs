@@ -1,7 +1,7 @@
 //! Shared pieces of the cross-target tests: recorded input traces (pose and
 //! raw counts per planner step, and the guard's samples of each advance,
-//! from sim-host's worlds and sensors) and the host core's answers to them, plus the emulator harnesses of the two
-//! firmwares ([`avr`], [`stm32`]).
+//! from sim-host's worlds and sensors) and the host core's answers to them,
+//! plus the emulator harnesses of the two firmwares ([`avr`], [`stm32`]).
 //!
 //! Crates: `avr-tester` (simavr inside) drives the ATmega328P firmware: ADC
 //! pin voltages, pin levels, UART, exact cycle counts.

@@ -17,10 +17,10 @@ fn reaches(rel: &str) {
     // true error adds the odometry's drift (0.97 mm ticks, 0.43° heading
     // steps). With the harness's encoders edge-exact (an edge wherever the
     // disc crosses one, either way) it stays within a few ticks: 3–9 mm
-    // over seeds 1–4 of both worlds, after 8–46 m (at commit 21f524c). Allow 50 mm plus 0.5 %
-    // of the path. (Summing each wheel's travel regardless of direction, as
-    // the harness first did, made an edge of every back-and-forth across
-    // none: 0.68 m off after 30 m.)
+    // over seeds 1–4 of both worlds, after 8–46 m (at commit 21f524c).
+    // Allow 50 mm plus 0.5 % of the path. (Summing each wheel's travel
+    // regardless of direction, as the harness first did, made an edge of
+    // every back-and-forth across none: 0.68 m off after 30 m.)
     let bound_m = 0.05 + 0.005 * run.path_m;
     assert!(
         run.to_goal_m < bound_m,

@@ -92,7 +92,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~28.0 KiB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~27.9 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
@@ -120,11 +120,12 @@ fn firmware_has_no_panicking_paths() {
 /// iterations skipped, `firmware-avr/asm/udivmodsi4.S`), not
 /// compiler-builtins' slower generic ones (`firmware-avr/build.rs`):
 /// `__udivmodsi4` is a strong symbol and the generic `u32_div_rem` is not
-/// linked; avr-libc's memory copies likewise.
-/// It multiplies with the firmware's flat `__mulsi3` (`asm/mulsi3.S`), not
-/// libgcc's, which calls `__muluhisi3`. (The signed division and `memmove` are linked only if
-/// something needs them: since the configuration is built at compile time,
-/// nothing does; when they are, they must be libgcc's and avr-libc's.)
+/// linked; avr-libc's memory copies likewise. (The signed division and
+/// `memmove` are linked only if something needs them: since the
+/// configuration is built at compile time, nothing does; when they are,
+/// they must be libgcc's and avr-libc's.) It multiplies with the firmware's
+/// flat `__mulsi3` (`asm/mulsi3.S`), not libgcc's, which calls
+/// `__muluhisi3`.
 #[test]
 fn firmware_links_libgcc_division_and_libc_copies() {
     let out = std::process::Command::new("avr-nm")

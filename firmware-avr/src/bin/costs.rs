@@ -1,9 +1,9 @@
 //! The `costs` bench: what the planner step's parts cost on the ATmega328P.
 //!
 //! Times the fixed-point primitives the step is built of (a 32-bit
-//! division and multiply, and sweeps of each through every path of the
-//! firmware's own routines, `asm/`, the square root, `hypot`, `atan2`, the sine,
-//! `1/d²`, the free-distance rule) and the virtual obstacles' force with
+//! division and multiply, the square root, `hypot`, `atan2`, the sine,
+//! `1/d²`, the free-distance rule), sweeps the firmware's own division and
+//! multiply (`asm/`) through every path, and times the virtual obstacles' force with
 //! 1 to 24 obstacles in reach (the escape's capacity), each on fixed
 //! inputs, and prints one line per call: `C name a b result_x result_y
 //! cycles`, then `END`. The figures are
