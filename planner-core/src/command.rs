@@ -188,12 +188,12 @@ pub fn free_way_mm(
 
 /// How far along a path along `dir` the point (`x`, `y`) lies.
 fn along(x: i32, y: i32, dir: Dir) -> i32 {
-    mul_q14(x, dir.c) + mul_q14(y, dir.s)
+    mul_q14(x, dir.cos()) + mul_q14(y, dir.sin())
 }
 
 /// How far to the left of a path along `dir` the point (`x`, `y`) lies.
 fn lateral(x: i32, y: i32, dir: Dir) -> i32 {
-    mul_q14(y, dir.c) - mul_q14(x, dir.s)
+    mul_q14(y, dir.cos()) - mul_q14(x, dir.sin())
 }
 
 /// Half the chord a disc of radius `r` cuts from a line `lateral` from
@@ -277,7 +277,7 @@ impl Flank {
         for (i, (&r, sensor)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
             let Reading::Range(mm) = r else { continue };
             let e = cfg.sensor_offset_mm + mm;
-            if mul_q14(sensor.s, e as i32).abs() < FLANK_LATERAL_MM {
+            if mul_q14(sensor.sin(), e as i32).abs() < FLANK_LATERAL_MM {
                 // Beyond the reach the rover has yet to pass it; it keeps
                 // the nearer sightings as it comes.
                 let p = centre.offset_dir(sensor_direction(cfg, dir, i), e);

@@ -350,7 +350,7 @@ pub(crate) const fn in_range(v: i32, lo: i32, hi: i32) -> bool {
 /// distance. The product grows with `d`, so the set is `0 ..= d_max`:
 /// `(d·s + 2^13) >> 14 ≤ w` ⇔ `d·s ≤ (w + 1)·2^14 − 2^13 − 1`.
 const fn corridor_mm(dir: Dir, half_width: u16) -> u16 {
-    let s = dir.s.unsigned_abs();
+    let s = dir.sin().unsigned_abs();
     let limit = (half_width as u32 + 1) * (1 << 14) - (1 << 13) - 1;
     match limit.checked_div(s) {
         Some(d) if d < u16::MAX as u32 => d as u16,
@@ -372,7 +372,7 @@ mod tests {
                     .step_by(7)
                     .chain([d_max, d_max.saturating_add(1)])
                 {
-                    let lateral = crate::fixed::mul_q14(d as i32, dir.s.abs());
+                    let lateral = crate::fixed::mul_q14(d as i32, dir.sin().abs());
                     assert_eq!(lateral <= w as i32, d <= d_max, "{deg}° w={w} d={d}");
                 }
             }

@@ -404,6 +404,9 @@ impl Escape {
 
     /// Account for one planner cycle with the rover at `robot`, `goal_mm`
     /// from the goal.
+    ///
+    /// Out of line on the AVR, as [`crate::forces::collision_points`] is.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn observe(&mut self, cfg: &EscapeConfig, robot: Point, goal_mm: u16) -> Verdict {
         if !cfg.enabled {
             return Verdict::Continue;

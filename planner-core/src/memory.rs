@@ -243,6 +243,9 @@ impl Memory {
     /// One scan of the memory for a merge, and one more for the midpoint's
     /// sums when the robot has moved since they were kept (the midpoint
     /// needs that scan this cycle anyway).
+    ///
+    /// Out of line on the AVR, as [`crate::forces::collision_points`] is.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn remember(
         &mut self,
         point: Point,
