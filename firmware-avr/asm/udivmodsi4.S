@@ -14,7 +14,8 @@
 ; left. One compare per k picks the largest. Same results as libgcc's for
 ; every input (the `costs` bench checks 4,000 divisions through every
 ; entry against the host's; the firmware's replays, bit for bit). The
-; planner's quotients mostly have 16 bits or fewer: 16 iterations, not 32.
+; planner's quotients mostly have 16 bits or fewer: 16 iterations, not 32,
+; and those (with divisors below 2^24) take a shorter loop of their own.
 
 	.section .text.libgcc.div,"ax",@progbits
 	.global	__udivmodsi4
@@ -53,16 +54,47 @@ __udivmodsi4:
 	sec
 	rjmp	.Lep
 .Lskip16:
+	; Quotient below 2^16 and divisor below 2^24 (r21 is 0): its own loop
+	; of 16 passes. The remainder (n >> 16 at first) stays below the
+	; divisor, so three bytes hold it (r26, r27, r30), and the dividend's
+	; low half shifts out of r22:r23 as the inverted quotient bits shift
+	; in. Doubled, the remainder may carry out of its three bytes: then it
+	; is above the divisor, and the subtraction's result fits again.
+	; About 15.5 cycles a pass against the shared loop's 19.5.
 	movw	r26, r24		; remainder = n >> 16
-	ldi	r30, 17
+	ldi	r30, 17			; 17 shifts of r22:r23, 16 passes
 	mov	r1, r30
 	ldi	r30, 0
-	ldi	r31, 0
-	movw	r24, r22		; n << 16, then 0x7fff
-	ldi	r23, 0x7f
-	ldi	r22, 0xff
-	sec
-	rjmp	.Lep
+	rjmp	.L16ep			; (the first bit shifted in is shifted out)
+.L16sub:
+	sub	r26, r18
+	sbc	r27, r19
+	sbc	r30, r20
+	clc				; quotient bit 1 (inverted: 0)
+.L16ep:
+	adc	r22, r22		; the inverted quotient bit in, the next dividend bit out
+	adc	r23, r23
+	dec	r1
+	breq	.L16done
+	adc	r26, r26		; the dividend's bit into the remainder
+	adc	r27, r27
+	adc	r30, r30
+	brcs	.L16sub			; past 2^24: above the divisor
+	cp	r26, r18
+	cpc	r27, r19
+	cpc	r30, r20
+	brcc	.L16sub
+	rjmp	.L16ep			; below the divisor: quotient bit 0 (carry 1)
+.L16done:
+	com	r22			; r1 is 0 again
+	com	r23
+	movw	r18, r22		; quotient
+	ldi	r20, 0
+	ldi	r21, 0
+	movw	r22, r26		; remainder
+	mov	r24, r30
+	ldi	r25, 0
+	ret
 .Lskip24:
 	mov	r26, r23		; remainder = n >> 8
 	mov	r27, r24
