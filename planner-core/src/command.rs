@@ -237,6 +237,11 @@ pub struct Flank {
     /// The advance in progress: its heading and length (it starts where
     /// the planner's cycle was; `None` while the rover turns in place).
     advance: Option<(Angle, u16)>,
+    /// A heading and its direction, kept by the looks: the looks of one
+    /// advance share it (on the AVR a sine and a cosine are ~680 cycles of
+    /// a look's ~7,700). Keyed by the heading, so that the step need not
+    /// forget it.
+    kept_dir: Option<(Angle, Dir)>,
 }
 
 impl Flank {
@@ -267,7 +272,14 @@ impl Flank {
         let Some((heading, step)) = self.advance else {
             return;
         };
-        let dir = Dir::of(heading);
+        let dir = match self.kept_dir {
+            Some((h, dir)) if h == heading => dir,
+            _ => {
+                let dir = Dir::of(heading);
+                self.kept_dir = Some((heading, dir));
+                dir
+            }
+        };
         let centre = from.offset_dir(dir, step.saturating_sub(remaining_mm));
         // Points the rover has left behind: the forgetting is here, where
         // the rover moves, not in the step (a rover turning in place keeps
