@@ -8,6 +8,12 @@
 ; a3 were), then those of a0 and a1 (kept in r26, r27). The same product,
 ; wrapping, for signed and unsigned operands; the `costs` bench checks a
 ; sweep against the host's.
+;
+; First a shorter way for two operands below 2^16, the four products of
+; their low bytes: 24 cycles to the `ret` against 41, and 6 more for the
+; others. Of the planner step's ~66 products, 64 % are of two such
+; operands, 32 % of two negative 16-bit ones (whose high bytes are 0xff:
+; handling them too costs more in tests than it saves) and 4 % wider.
 
 ; One 8 x 8-bit product added at bytes 1 and 2 (its carry into byte 3;
 ; r1 cleared to be the zero), at bytes 2 and 3, or its low byte at byte 3.
@@ -32,6 +38,20 @@
 	.global	__mulsi3
 	.type	__mulsi3, @function
 __mulsi3:
+	mov	r26, r24		; both below 2^16 (high bytes all 0)?
+	or	r26, r25
+	or	r26, r20
+	or	r26, r21
+	brne	.Lfull
+	movw	r26, r22		; a0, a1
+	mul	r27, r19		; a1 b1 -> bytes 2, 3
+	movw	r24, r0
+	mul	r26, r18		; a0 b0 -> bytes 0, 1
+	movw	r22, r0
+	at12	r26, r19		; a0 b1
+	at12	r27, r18		; a1 b0
+	ret
+.Lfull:
 	movw	r26, r22		; a0, a1
 	mul	r25, r18		; a3 b0 -> byte 3
 	mov	r25, r0

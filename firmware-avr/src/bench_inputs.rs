@@ -82,7 +82,12 @@ pub const MUL_SWEEP: u32 = 4_000;
 /// pseudo-random operands of one to four bytes each (signed and unsigned
 /// are the same bits).
 pub fn mul_sweep(mul: impl Fn(u32, u32) -> u32) -> u32 {
+    // The edges of both ways through the AVR's multiply (`firmware-avr/
+    // asm/mulsi3.S`): the largest operands below 2^16, and the first above.
     let mut sum = mul(u32::MAX, u32::MAX);
+    for (a, b) in [(0xffff, 0xffff), (0xffff, 0x1_0000), (0x1_0000, 0xffff)] {
+        sum = sum.rotate_left(5) ^ mul(a, b);
+    }
     for k in 0..MUL_SWEEP {
         let a = mix(k) >> (8 * (k % 4));
         let b = mix(a ^ 0x5bd1_e995) >> (8 * (k / 4 % 4));
