@@ -60,10 +60,52 @@ struct Sim {
     /// Steps that returned with frames left on the shadow stack (calls
     /// or returns the decoder missed).
     unbalanced: u64,
+    /// The entries of `__mulsi3` and `__udivmodsi4`, and what their
+    /// operands were at each call inside a step (see [`Operands`]).
+    arith: (u32, u32),
+    operands: Operands,
+}
+
+/// The operands the step's 32-bit multiplies and divisions were called
+/// with, read from the registers at the routines' entries: what their
+/// shorter ways in `firmware-avr/asm/` are chosen by.
+#[derive(Clone, Debug, Default)]
+pub struct Operands {
+    /// Multiplies whose operands were both below 2^16, both 16-bit values
+    /// sign-extended (not both below 2^16), or wider.
+    pub mul: [u64; 3],
+    /// Divisions by the quotient's length in bytes (1 to 4, rows) and the
+    /// divisor's (columns).
+    pub div: [[u64; 4]; 4],
+    /// Divisions by zero (the planner guards every one of its divisions).
+    pub div_by_zero: u64,
+}
+
+impl Operands {
+    fn multiply(&mut self, a: u32, b: u32) {
+        let short = |x: u32| x < 1 << 16;
+        let signed = |x: u32| (x as i32) >= -(1 << 15) && (x as i32) < 1 << 15;
+        let class = if short(a) && short(b) {
+            0
+        } else if signed(a) && signed(b) {
+            1
+        } else {
+            2
+        };
+        self.mul[class] += 1;
+    }
+
+    fn divide(&mut self, n: u32, d: u32) {
+        let bytes = |x: u32| ((32 - x.leading_zeros()).max(1) as usize).div_ceil(8) - 1;
+        match n.checked_div(d) {
+            Some(q) => self.div[bytes(q)][bytes(d)] += 1,
+            None => self.div_by_zero += 1,
+        }
+    }
 }
 
 impl Sim {
-    fn new(elf: &std::path::Path, step_entry: u32) -> Sim {
+    fn new(elf: &std::path::Path, step_entry: u32, arith: (u32, u32)) -> Sim {
         let mcu = CString::new("atmega328p").unwrap();
         let path = CString::new(elf.to_str().unwrap()).unwrap();
         unsafe {
@@ -101,6 +143,8 @@ impl Sim {
                 in_step: None,
                 steps: 0,
                 unbalanced: 0,
+                arith,
+                operands: Operands::default(),
             }
         }
     }
@@ -154,6 +198,18 @@ impl Sim {
             self.steps += 1;
         }
         let (op, call) = self.decode(pc);
+        if self.in_step.is_some() && (pc == self.arith.0 || pc == self.arith.1) {
+            // avr-gcc's convention: the first operand in r22..r25, the
+            // second in r18..r21.
+            let reg = |i: usize| unsafe { *(*self.avr).data.add(i) };
+            let word = |i: usize| u32::from_le_bytes([reg(i), reg(i + 1), reg(i + 2), reg(i + 3)]);
+            let (a, b) = (word(22), word(18));
+            if pc == self.arith.0 {
+                self.operands.multiply(a, b);
+            } else {
+                self.operands.divide(a, b);
+            }
+        }
         let before = unsafe { (*self.avr).cycle };
         let state = unsafe { ffi::avr_run(self.avr) };
         assert!(
@@ -284,6 +340,8 @@ pub struct Profile {
     /// Steps whose calls and returns did not pair up (none, or the split
     /// by callee is wrong).
     pub unbalanced: u64,
+    /// The operands of the steps' 32-bit multiplies and divisions.
+    pub operands: Operands,
 }
 
 /// [`Profile::by_callee`]'s name for the step's own code (`step_raw` and
@@ -296,7 +354,11 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     let entry = syms
         .entry_of("firmware_avr::timed_step")
         .unwrap_or_else(|| panic!("no timed_step in {elf:?}"));
-    let mut sim = Sim::new(elf, entry);
+    let arith = ["__mulsi3", "__udivmodsi4"].map(|f| {
+        syms.entry_of(f)
+            .unwrap_or_else(|| panic!("no {f} in {elf:?}"))
+    });
+    let mut sim = Sim::new(elf, entry, (arith[0], arith[1]));
     assert_eq!(sim.line(), "READY", "boot line");
     let mut timed: u64 = 0;
     let mut mismatches = 0;
@@ -347,6 +409,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         worst: (sim.worst_step.0, by_callee(&sim.worst_step.1)),
         mismatches,
         unbalanced: sim.unbalanced,
+        operands: sim.operands,
     }
 }
 

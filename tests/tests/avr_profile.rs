@@ -1,6 +1,7 @@
 //! The cycle profiler (`cargo xtask avr-profile`) accounts for the steps
 //! the firmware times itself: same steps, same cycles (to the few the
-//! firmware's own clock reads and call add), every cycle charged once.
+//! firmware's own clock reads and call add), every cycle charged once, and
+//! the operands of every 32-bit multiply and division read.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
@@ -62,6 +63,20 @@ fn the_profile_accounts_for_the_timed_steps() {
         "own code {own} of {}",
         p.cycles
     );
+    // The operands were read at every call of the 32-bit multiply: its
+    // cycles per call (its `ret` included, the caller's `call` not) lie
+    // between its shorter way's 28 and its full way's 51
+    // (`firmware-avr/asm/mulsi3.S`).
+    let o = &p.operands;
+    let muls: u64 = o.mul.iter().sum();
+    let per_mul = cycles_of(&p.by_function, "__mulsi3") as f64 / muls.max(1) as f64;
+    println!("{muls} multiplies, {per_mul:.1} cycles each");
+    assert!(
+        (28.0..=51.0).contains(&per_mul),
+        "{per_mul} cycles a multiply"
+    );
+    assert!(o.div.iter().flatten().sum::<u64>() > 0, "divisions seen");
+    assert_eq!(o.div_by_zero, 0, "no division by zero");
     let inside_atan2 = cycles_of(&p.by_function, "Angle::atan2");
     assert!(
         of("Angle::atan2") > inside_atan2,

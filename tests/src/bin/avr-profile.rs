@@ -36,6 +36,26 @@ fn main() {
         *worst,
         1,
     );
+    let o = &p.operands;
+    let muls: u64 = o.mul.iter().sum();
+    let pct = |n: u64, of: u64| n as f64 * 100.0 / of.max(1) as f64;
+    println!(
+        "\nmultiplies: {:.1}/step; both operands below 2^16 {:.1} %, both 16-bit signed {:.1} %, wider {:.1} %",
+        muls as f64 / steps as f64,
+        pct(o.mul[0], muls),
+        pct(o.mul[1], muls),
+        pct(o.mul[2], muls)
+    );
+    let divs: u64 = o.div.iter().flatten().sum();
+    println!(
+        "divisions: {:.1}/step; by quotient and divisor bytes (q/d: count):",
+        divs as f64 / steps as f64
+    );
+    for (q, row) in o.div.iter().enumerate() {
+        for (d, n) in row.iter().enumerate().filter(|(_, n)| **n > 0) {
+            println!("  q{}/d{}: {n}", q + 1, d + 1);
+        }
+    }
     println!("\nthe costliest instructions (avr-objdump -d the ELF to read them):");
     for (a, name, c) in p.by_address.iter().take(12) {
         println!("{:>7}/step  0x{a:04x}  {name}", c / steps);
