@@ -10,10 +10,12 @@
 ; sweep against the host's.
 ;
 ; First a shorter way for two operands below 2^16, the four products of
-; their low bytes: 24 cycles to the `ret` against 41, and 6 more for the
-; others. Of the planner step's ~66 products, 64 % are of two such
-; operands, 32 % of two negative 16-bit ones (whose high bytes are 0xff:
-; handling them too costs more in tests than it saves) and 4 % wider.
+; their two low bytes: 24 cycles to the `ret` against 41, and 6 more for
+; the others. Of the planner step's ~66 products (`cargo xtask
+; avr-profile` counts them), 64 % are of two such operands, 32 % of two
+; 16-bit ones of which one or both are negative (high bytes 0xff: telling
+; those apart too costs about as much as their shorter way would save)
+; and 4 % wider.
 
 ; One 8 x 8-bit product added at bytes 1 and 2 (its carry into byte 3;
 ; r1 cleared to be the zero), at bytes 2 and 3, or its low byte at byte 3.

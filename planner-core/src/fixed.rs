@@ -349,8 +349,13 @@ pub fn sat_u16(v: i32) -> u16 {
 /// elsewhere (a Cortex-M4 divides in a few cycles, and three or four steps
 /// from a power-of-two start replace sixteen).
 pub fn isqrt(v: u32) -> u16 {
+    // Below 2^16 (the half chords of the free-distance rule, always) the
+    // same steps in 16 bits: on the AVR half the instructions.
     #[cfg(target_arch = "avr")]
-    return isqrt_bitwise(v);
+    return match u16::try_from(v) {
+        Ok(v) => isqrt_bitwise16(v) as u16,
+        Err(_) => isqrt_bitwise(v),
+    };
     #[cfg(not(target_arch = "avr"))]
     return isqrt_newton(v);
 }
@@ -383,6 +388,33 @@ fn isqrt_bitwise(v: u32) -> u16 {
         bit >>= 2;
     }
     root as u16
+}
+
+/// [`isqrt_bitwise`] for `v` below 2^16, in 16 bits.
+#[cfg_attr(not(any(test, target_arch = "avr")), allow(dead_code))]
+fn isqrt_bitwise16(v: u16) -> u8 {
+    if v == 0 {
+        return 0;
+    }
+    let mut rem = v;
+    let mut root: u16 = 0;
+    let mut bit: u16 = 1 << 14;
+    if bit >> 8 > v {
+        bit >>= 8;
+    }
+    while bit > v {
+        bit >>= 2;
+    }
+    while bit != 0 {
+        if rem >= root + bit {
+            rem -= root + bit;
+            root = (root >> 1) + bit;
+        } else {
+            root >>= 1;
+        }
+        bit >>= 2;
+    }
+    root as u8
 }
 
 /// `floor(√v)` by Newton's iteration from above `√v`, from where it
@@ -554,6 +586,9 @@ mod tests {
             let r = isqrt_newton(v) as u64;
             assert!(r * r <= v as u64 && (r + 1) * (r + 1) > v as u64, "{v}");
             assert_eq!(isqrt_bitwise(v), r as u16, "{v}");
+            if let Ok(v) = u16::try_from(v) {
+                assert_eq!(isqrt_bitwise16(v), r as u8, "{v}");
+            }
         };
         (0..1 << 20).for_each(check);
         (0..=u16::MAX as u32).for_each(|r| {
