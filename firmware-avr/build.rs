@@ -17,12 +17,11 @@
 //! calls these with avr-gcc's), same results (C's truncating division, as
 //! Rust's; the C library's copies).
 //!
-//! The unsigned division itself is libgcc's loop with the iterations
-//! skipped whose quotient bit is known to be 0 (`asm/udivmodsi4.S`,
-//! assembled here by avr-gcc): most of the planner's quotients have 16 bits
-//! or fewer, so its divisions take 16 iterations instead of 32. libgcc's
-//! signed division calls it. The 32-bit multiply (`asm/mulsi3.S`)
-//! is libgcc's without its nested calls.
+//! The unsigned division (`asm/udivmodsi4.S`) and the 32-bit multiply
+//! (`asm/mulsi3.S`) are the firmware's own, assembled here by avr-gcc with
+//! libgcc's calling convention; each file's header says how it differs
+//! from libgcc's (shorter ways for the operands the planner mostly has).
+//! libgcc's signed division calls the unsigned one.
 use std::{env, path::PathBuf, process::Command};
 
 /// (what `avr-gcc -print-file-name` is asked for, the members taken from it)

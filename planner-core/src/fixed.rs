@@ -3,7 +3,8 @@
 //!
 //! The formats are chosen for the ATmega328P: 16-bit storage, 32-bit
 //! intermediates, no floating point, and as few 32-bit divisions per planner
-//! step as possible (one costs about 1,600 cycles there). There are no lookup
+//! step as possible (one costs ~400 cycles there with the firmware's own
+//! routine, `avr_costs`; 1,575 with compiler-builtins'). There are no lookup
 //! tables: sine is a polynomial, so nothing has to be copied into the AVR's
 //! 2 KB of RAM.
 //!
@@ -345,12 +346,14 @@ pub fn sat_u16(v: i32) -> u16 {
 /// Integer square root, `floor(√v)`.
 ///
 /// Two algorithms with the same result, chosen per target: bit by bit on
-/// the AVR (no division: one costs 1,600 cycles there), Newton's iteration
+/// the AVR (no division: Newton's three or four would cost ~400 cycles each
+/// there, `avr_costs`), Newton's iteration
 /// elsewhere (a Cortex-M4 divides in a few cycles, and three or four steps
 /// from a power-of-two start replace sixteen).
 pub fn isqrt(v: u32) -> u16 {
-    // Below 2^16 (the half chords of the free-distance rule, always) the
-    // same steps in 16 bits: on the AVR half the instructions.
+    // Below 2^16 (the free-distance rule's half chords, always) the same
+    // steps in 16 bits: on the AVR half the instructions (`cargo xtask
+    // avr-report`: worst step 30,358 → 29,755 cycles).
     #[cfg(target_arch = "avr")]
     return match u16::try_from(v) {
         Ok(v) => isqrt_bitwise16(v) as u16,
@@ -360,62 +363,58 @@ pub fn isqrt(v: u32) -> u16 {
     return isqrt_newton(v);
 }
 
-/// `floor(√v)` bit by bit: shifts and subtractions only.
-#[cfg_attr(not(any(test, target_arch = "avr")), allow(dead_code))]
-fn isqrt_bitwise(v: u32) -> u16 {
-    if v == 0 {
-        return 0;
-    }
-    let mut rem = v;
-    let mut root: u32 = 0;
-    // Start at the highest even power of two not above v: by halves and a
-    // byte, then two bits at a time (`1 << leading_zeros(..)` would be a
-    // call and a shift loop of up to 30 turns on the AVR).
-    let mut bit: u32 = if v >= 1 << 16 { 1 << 30 } else { 1 << 14 };
-    if bit >> 8 > v {
-        bit >>= 8;
-    }
-    while bit > v {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
+/// `floor(√v)` bit by bit, shifts and subtractions only, in the width of
+/// `$t` (`$root` holds the root). One text for both widths: written as a
+/// generic function over the operator traits, LLVM's AVR code was slower
+/// (`cargo xtask avr-report`: worst step 29,755 → 30,009 cycles).
+macro_rules! isqrt_bitwise {
+    ($(#[$doc:meta])* $name:ident, $t:ty, $root:ty, $start:expr) => {
+        $(#[$doc])*
+        #[cfg_attr(not(any(test, target_arch = "avr")), allow(dead_code))]
+        fn $name(v: $t) -> $root {
+            if v == 0 {
+                return 0;
+            }
+            let mut rem = v;
+            let mut root: $t = 0;
+            let mut bit: $t = $start(v);
+            if bit >> 8 > v {
+                bit >>= 8;
+            }
+            while bit > v {
+                bit >>= 2;
+            }
+            while bit != 0 {
+                if rem >= root + bit {
+                    rem -= root + bit;
+                    root = (root >> 1) + bit;
+                } else {
+                    root >>= 1;
+                }
+                bit >>= 2;
+            }
+            root as $root
         }
-        bit >>= 2;
-    }
-    root as u16
+    };
 }
 
-/// [`isqrt_bitwise`] for `v` below 2^16, in 16 bits.
-#[cfg_attr(not(any(test, target_arch = "avr")), allow(dead_code))]
-fn isqrt_bitwise16(v: u16) -> u8 {
-    if v == 0 {
-        return 0;
-    }
-    let mut rem = v;
-    let mut root: u16 = 0;
-    let mut bit: u16 = 1 << 14;
-    if bit >> 8 > v {
-        bit >>= 8;
-    }
-    while bit > v {
-        bit >>= 2;
-    }
-    while bit != 0 {
-        if rem >= root + bit {
-            rem -= root + bit;
-            root = (root >> 1) + bit;
-        } else {
-            root >>= 1;
-        }
-        bit >>= 2;
-    }
-    root as u8
-}
+isqrt_bitwise!(
+    /// `floor(√v)` bit by bit. The start is the highest even power of two
+    /// not above v, found by halves and a byte, then two bits at a time
+    /// (`1 << leading_zeros(..)` would be a call and a shift loop of up to
+    /// 30 turns on the AVR).
+    isqrt_bitwise,
+    u32,
+    u16,
+    |v: u32| if v >= 1 << 16 { 1 << 30 } else { 1 << 14 }
+);
+isqrt_bitwise!(
+    /// [`isqrt_bitwise`] for `v` below 2^16, in 16 bits.
+    isqrt_bitwise16,
+    u16,
+    u8,
+    |_| 1 << 14
+);
 
 /// `floor(√v)` by Newton's iteration from above `√v`, from where it
 /// decreases monotonically to the floor.

@@ -6,8 +6,8 @@
 //! Two budgets are not met yet and their tests are ignored with the reason
 //! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
 //! the step costs tens of thousands of cycles (32-bit arithmetic compiles
-//! to long AVR sequences: a 32-bit division ~600 cycles, a square root up
-//! to ~1,200, a virtual obstacle in reach ~1,800; `avr_costs.rs` prints
+//! to long AVR sequences: a 32-bit division ~400 cycles, a square root up
+//! to ~1,200, a virtual obstacle in reach ~950; `avr_costs.rs` prints
 //! them), and the firmware is ~28 KB of flash.
 
 use planner_core::AdcProfile;
