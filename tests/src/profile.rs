@@ -324,6 +324,8 @@ pub struct Profile {
     pub cycles: u64,
     /// Cycles of the steps as the firmware timed them itself (Timer1).
     pub timed: u64,
+    /// Each step's cycles as the firmware timed them, in replay order.
+    pub step_cycles: Vec<u32>,
     /// Cycles by function the instructions are in.
     pub by_function: Vec<(String, u64)>,
     /// Cycles by instruction address (byte address) and its function,
@@ -360,7 +362,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     });
     let mut sim = Sim::new(elf, entry, (arith[0], arith[1]));
     assert_eq!(sim.line(), "READY", "boot line");
-    let mut timed: u64 = 0;
+    let mut step_cycles = Vec::new();
     let mut mismatches = 0;
     for t in traces {
         sim.send(format!("R {} {}\n", t.goal.x, t.goal.y).as_bytes());
@@ -370,7 +372,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
             let r = sim.take(REPLAY_ANSWER_LEN);
             let got = replay_answer(&r).expect("replay answer");
             mismatches += usize::from(got.answer != *want);
-            timed += got.cycles as u64;
+            step_cycles.push(got.cycles);
         }
         sim.send(&[0x00]);
         assert_eq!(sim.line(), "OK", "leave replay");
@@ -394,7 +396,8 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     Profile {
         steps: sim.steps,
         cycles: sim.hist.values().sum(),
-        timed,
+        timed: step_cycles.iter().map(|&c| u64::from(c)).sum(),
+        step_cycles,
         by_function: sorted(inner),
         by_address: {
             let mut v: Vec<(u32, String, u64)> = sim

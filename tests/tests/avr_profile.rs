@@ -14,6 +14,7 @@ fn the_profile_accounts_for_the_timed_steps() {
     let frames: usize = traces.iter().map(|t| t.frames.len()).sum();
     let p = profile(&firmware_elf(), &traces);
     assert_eq!(p.steps as usize, frames, "one profiled step per frame");
+    assert_eq!(p.step_cycles.len(), frames, "one timed step per frame");
     assert_eq!(p.mismatches, 0, "the firmware's commands are the host's");
     assert_eq!(
         p.unbalanced, 0,

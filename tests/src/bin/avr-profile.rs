@@ -36,6 +36,21 @@ fn main() {
         *worst,
         1,
     );
+    // How the steps stand against issue 5's budget (8,000) and aim (3,000).
+    println!("\nsteps by cycles (as the firmware timed them):");
+    let bounds = [3_000, 8_000, 15_000, 20_000, 25_000, u32::MAX];
+    let (mut prev, mut below) = (0, 0);
+    for hi in bounds {
+        let n = p.step_cycles.iter().filter(|&&c| c <= hi).count() - below;
+        below += n;
+        let range = match (prev, hi) {
+            (0, _) => format!("up to {hi}"),
+            (_, u32::MAX) => format!("above {prev}"),
+            _ => format!("{} to {hi}", prev + 1),
+        };
+        println!("{n:>7} steps  {range}");
+        prev = hi;
+    }
     let o = &p.operands;
     let muls: u64 = o.mul.iter().sum();
     let pct = |n: u64, of: u64| n as f64 * 100.0 / of.max(1) as f64;
