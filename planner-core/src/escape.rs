@@ -59,7 +59,7 @@
 //! lets the best distance improve).
 
 use crate::fixed::{
-    inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
+    box_within, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
 };
 use crate::ring::Ring;
 use heapless::Deque;
@@ -481,10 +481,11 @@ impl Escape {
             reach_mm: reach_mm(law, weight),
         };
         self.drops_since_best = self.drops_since_best.saturating_add(1);
-        let held = self
-            .obstacles
-            .iter_mut()
-            .find(|v| within(v.centre, robot, VIRTUAL_MERGE_MM));
+        let held = self.obstacles.iter_mut().find(|v| {
+            // `within`'s box test first, as in `any_within`.
+            box_within(v.centre, robot, VIRTUAL_MERGE_MM)
+                && within(v.centre, robot, VIRTUAL_MERGE_MM)
+        });
         if let Some(v) = held {
             *v = new(v.centre, v.weight.saturating_add(1));
         } else {
@@ -650,7 +651,11 @@ impl Escape {
 /// runs on both halves of a deque, and the AVR pays for each copy.
 #[inline(never)]
 fn any_within(points: &[Point], robot: Point, r_mm: u16) -> bool {
-    points.iter().any(|&c| within(c, robot, r_mm))
+    // `within`'s own box test first, here: most crumbs fail it, and then
+    // no call is made.
+    points
+        .iter()
+        .any(|&c| box_within(c, robot, r_mm) && within(c, robot, r_mm))
 }
 
 #[cfg(test)]
