@@ -112,6 +112,9 @@ pub enum CalibrationError {
 /// 16-bit multiply (no division on the AVR).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
+// In this order on the AVR, the scalars within a load's 63-byte reach
+// (Rust's order put `shift` at byte 72: see `Planner`).
+#[cfg_attr(target_arch = "avr", repr(C))]
 pub struct Calibration {
     shift: u8,
     full_scale: u16,
