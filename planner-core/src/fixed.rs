@@ -495,6 +495,20 @@ impl Force {
         }
     }
 
+    /// The sum for callers that have bounded it below 2^31, so that
+    /// [`Force::plus`] would not saturate: the same value as either sum,
+    /// by the cheaper one on each target. On the AVR the plain add (a
+    /// saturating one is ~50 cycles a component); elsewhere the saturating
+    /// one, which there costs nothing more (with the plain add the STM32's
+    /// worst step was 30 instructions longer, `cargo xtask stm32-report`).
+    pub fn plus_unsaturated(self, other: Force) -> Force {
+        if cfg!(target_arch = "avr") {
+            self.plus_bounded(other)
+        } else {
+            self.plus(other)
+        }
+    }
+
     /// A force of `magnitude` (Q10) pointing along the unit vector `dir`.
     pub fn along_dir(dir: Dir, magnitude: i32) -> Force {
         let (x, y) = dir.scaled(magnitude);

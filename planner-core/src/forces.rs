@@ -139,7 +139,9 @@ pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings
     let mut f = Force::ZERO;
     for &i in sensor_group(group) {
         if let Some(Reading::Clear) = readings.get(i) {
-            f = f.plus(Force::along_dir(
+            // At most five terms of |ξ_sen| ≤ 2^14 (and a little, from a
+            // turned direction's rounding): a plain add.
+            f = f.plus_unsaturated(Force::along_dir(
                 sensor_direction(cfg, heading, i),
                 cfg.xi_sen,
             ));

@@ -350,9 +350,14 @@ impl Planner {
             x: pull[0] as i32,
             y: pull[1] as i32,
         };
+        // Plain adds: the terms' bounds keep the sum below 2^30 (the
+        // attraction and the midpoint force at most 2^14 a component, the
+        // repulsion 5 · 2^17, the off-sensor force 5 · 2^14, the virtual
+        // obstacles' 2^29: see `Escape::force`), so a saturating add never
+        // saturates here, and on the AVR it costs ~50 cycles a component.
         let mut f = attraction
-            .plus(repulsive)
-            .plus(self.escape.force_kept(robot, bearing));
+            .plus_unsaturated(repulsive)
+            .plus_unsaturated(self.escape.force_kept(robot, bearing));
         if !near {
             let (_, ax, ay) = self.memory.away_from_midpoint_kept(robot, self.goal);
             let mid = match self.kept_midpoint {
@@ -360,9 +365,9 @@ impl Planner {
                 _ => forces::midpoint(cfg, ax, ay),
             };
             self.kept_midpoint = Some((ax, ay, mid));
-            f = f.plus(mid);
+            f = f.plus_unsaturated(mid);
             if self.following {
-                f = f.plus(forces::off_sensor(cfg, heading_dir, motion, readings));
+                f = f.plus_unsaturated(forces::off_sensor(cfg, heading_dir, motion, readings));
             }
         }
         // Eq. 17.
@@ -565,6 +570,27 @@ mod tests {
             position: Point::new(x, y),
             heading: Angle::from_deg(deg),
         }
+    }
+
+    #[test]
+    fn the_step_force_sum_cannot_saturate() {
+        // What lets the step add its forces without saturating
+        // (`Force::plus_unsaturated`): each term at its bound, all one way.
+        // Fails if a capacity, clamp or gain limit grows past it.
+        use crate::escape::{MAX_PUSH, VIRTUAL_CAPACITY};
+        use crate::fixed::{FORCE_ONE, MAX_SCALED};
+        let gain = 16 * FORCE_ONE as i64 + 2; // the config's limit, and rounding
+        let attraction = gain;
+        let repulsion = SENSOR_COUNT as i64 * MAX_SCALED as i64;
+        let escape = VIRTUAL_CAPACITY as i64 * MAX_PUSH as i64 * u8::MAX as i64;
+        let midpoint = gain;
+        let off_sensor = SENSOR_COUNT as i64 * gain;
+        let sum = attraction + repulsion + escape + midpoint + off_sensor;
+        assert!(sum < i32::MAX as i64, "{sum}");
+        assert!(ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .gains_q10(16 * FORCE_ONE + 1, FORCE_ONE, FORCE_ONE)
+            .build()
+            .is_err());
     }
 
     #[test]
