@@ -245,8 +245,10 @@ impl Calibration {
             let f = (x & ((1 << FRACTION_BITS) - 1)) as i32;
             let d0 = self.mm.get(i).copied().unwrap_or(0) as i32;
             let d1 = self.mm.get(i + 1).copied().unwrap_or(d0 as u16) as i32;
+            // Between `d0` and `d1` (f < 2^FRACTION_BITS, and the rounding
+            // cannot pass `d1`): a `u16` as it is, no clamp needed.
             let d = d0 + (((d1 - d0) * f + (1 << (FRACTION_BITS - 1))) >> FRACTION_BITS);
-            Reading::Range(d.clamp(0, u16::MAX as i32) as u16)
+            Reading::Range(d as u16)
         }
     }
 
@@ -545,6 +547,34 @@ mod tests {
                     Reading::Range(d as u16),
                     "{bits} bits, {raw}"
                 );
+            }
+        }
+    }
+
+    #[test]
+    fn every_reading_lies_between_its_bins_edges() {
+        // What lets `reading` return its interpolation as a `u16` with no
+        // clamp: the datasheet tables and a steep one (2,000 mm to 20
+        // between two adjacent counts, its bins extrapolated to the
+        // table's limits), every count of 8- to 16-bit ADCs.
+        for bits in [8u8, 10, 12, 16] {
+            let adc = AdcProfile {
+                bits,
+                vref_mv: 5_000,
+            };
+            let mid = 1u16 << (bits - 1);
+            let steep = Calibration::from_points(adc, &[(mid, 2_000), (mid + 1, 20)]).unwrap();
+            for cal in [Calibration::gp2y0a21(adc).unwrap(), steep] {
+                for raw in cal.far_count..=cal.near_count {
+                    let i = (raw >> cal.shift) as usize;
+                    let d0 = cal.mm[i];
+                    let d1 = cal.mm.get(i + 1).copied().unwrap_or(d0);
+                    let d = cal.reading(raw).range_mm().unwrap();
+                    assert!(
+                        (d0.min(d1)..=d0.max(d1)).contains(&d),
+                        "{bits} bits, {raw}: {d} outside {d0}..{d1}"
+                    );
+                }
             }
         }
     }
