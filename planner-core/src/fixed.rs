@@ -499,8 +499,8 @@ impl Force {
     /// [`Force::plus`] would not saturate: the same value as either sum,
     /// by the cheaper one on each target. On the AVR the plain add (a
     /// saturating one is ~50 cycles a component); elsewhere the saturating
-    /// one, which there costs nothing more (with the plain add the STM32's
-    /// worst step was 30 instructions longer, `cargo xtask stm32-report`).
+    /// one (with the plain add the STM32's worst step was 30 instructions
+    /// longer, `cargo xtask stm32-report`).
     pub fn plus_unsaturated(self, other: Force) -> Force {
         if cfg!(target_arch = "avr") {
             self.plus_bounded(other)
