@@ -125,7 +125,7 @@ impl Angle {
         let mut ax = x.unsigned_abs();
         let mut ay = y.unsigned_abs();
         // Keep both below 2^16 so `lo << 15` fits in u32.
-        while ax >= 1 << 16 || ay >= 1 << 16 {
+        while (ax | ay) >= 1 << 16 {
             ax >>= 1;
             ay >>= 1;
         }
@@ -444,7 +444,7 @@ pub fn hypot(dx: i32, dy: i32) -> u16 {
     let mut ay = dy.unsigned_abs();
     let mut shift = 0;
     // Each component below 2^15 keeps the sum of squares below 2^31.
-    while ax >= 1 << 15 || ay >= 1 << 15 {
+    while (ax | ay) >= 1 << 15 {
         ax >>= 1;
         ay >>= 1;
         shift += 1;
