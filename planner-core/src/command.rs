@@ -142,7 +142,9 @@ pub fn free_way_mm(
         // stand-off (`along − standoff`) or the chord (at least
         // `along − rs`, the half chord being at most rs): if neither can be
         // below `free`, its side offset is not needed.
-        let (x, y) = sensor.scaled(e);
+        // At most 1,000 + 65,535 (the config's offset limit and a `u16`):
+        // within `MAX_SCALED`.
+        let (x, y) = sensor.scaled_bounded(e);
         let along = along(x, y, dir);
         if along - standoff.max(rs) >= free {
             continue;

@@ -11,6 +11,12 @@
 use crate::fixed::{Angle, Dir, FORCE_ONE};
 use crate::sensors::{AdcProfile, Calibration, CalibrationError, SENSOR_COUNT};
 
+/// The largest gain (ξ_att, ξ_MP, ξ_sen) a configuration takes: 16 force
+/// units, Q10. The forces built from a gain rely on it (they scale a
+/// direction by it without a clamp, and the step sums them without
+/// saturating).
+pub(crate) const MAX_GAIN: i32 = 16 * FORCE_ONE;
+
 /// Why a configuration was refused.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -277,7 +283,7 @@ impl ConfigBuilder {
         if !increasing || a[1] >= 0 || a[2] != 0 || a[3] <= 0 || a[0] < -90 || a[4] > 90 {
             return Err(ConfigError::SensorAngles);
         }
-        let gains = 16 * FORCE_ONE;
+        let gains = MAX_GAIN;
         if self.xi_att <= 0
             || !in_range(self.xi_att, 0, gains)
             || !in_range(self.xi_mp, 0, gains)

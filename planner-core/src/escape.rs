@@ -60,6 +60,7 @@
 
 use crate::fixed::{
     box_within, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
+    MAX_SCALED,
 };
 use crate::ring::Ring;
 use heapless::Deque;
@@ -271,7 +272,9 @@ impl Law {
 #[cold]
 #[inline(never)]
 fn away_from_goal(bearing: Angle, rim: u32) -> Force {
-    Force::along(bearing.add(Angle::HALF), rim as i32)
+    const _: () = assert!(MAX_PUSH <= MAX_SCALED);
+    // `rim` is a `Law`'s, at most `MAX_PUSH`.
+    Force::along_bounded(bearing.add(Angle::HALF), rim as i32)
 }
 
 /// Where the push of `weight` drops falls below [`VIRTUAL_MIN_PUSH`]:

@@ -2,9 +2,13 @@
 //! [`Force`] pointing the way the paper describes (eq. 16's printed signs are
 //! inconsistent; the directions are the design).
 
-use crate::config::Config;
-use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force};
+use crate::config::{Config, MAX_GAIN};
+use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force, MAX_SCALED};
 use crate::sensors::{Reading, Readings, SENSOR_COUNT};
+
+// The attraction, midpoint and off-sensor forces scale a direction by a
+// gain without a clamp (`Force::along_bounded`).
+const _: () = assert!(MAX_GAIN <= MAX_SCALED);
 
 /// A collision point: a reading inside the swept corridor of the next step.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -66,7 +70,7 @@ pub fn collision_points(
 
 /// Attractive force (eqs. 5, 6): constant magnitude ξ_att towards the target.
 pub fn attractive(cfg: &Config, bearing: Angle) -> Force {
-    Force::along(bearing, cfg.xi_att)
+    Force::along_bounded(bearing, cfg.xi_att)
 }
 
 /// Eq. 10 for one collision point `distance_mm` away along the world
@@ -74,7 +78,8 @@ pub fn attractive(cfg: &Config, bearing: Angle) -> Force {
 /// (eq. 9, `Σ (P_R − P_Ci) / d³`) is the sum over the cycle's collision
 /// points; the planner sums it in the loop that also places them.
 pub fn repulsion(toward: Dir, distance_mm: u16) -> Force {
-    Force::along_dir(-toward, inverse_square_force(distance_mm))
+    // At most 1.024e9 / 91² (`inverse_square_force`): within `MAX_SCALED`.
+    Force::along_dir_bounded(-toward, inverse_square_force(distance_mm))
 }
 
 /// World direction of sensor `i`'s beam for a robot heading `heading`.
@@ -91,7 +96,7 @@ pub fn midpoint(cfg: &Config, away_x: i32, away_y: i32) -> Force {
     if away_x == 0 && away_y == 0 {
         return Force::ZERO;
     }
-    Force::along(Angle::atan2(away_y, away_x), cfg.xi_mp)
+    Force::along_bounded(Angle::atan2(away_y, away_x), cfg.xi_mp)
 }
 
 /// The motion class relative to the target (paper §5.5 a).
@@ -141,7 +146,7 @@ pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings
         if let Some(Reading::Clear) = readings.get(i) {
             // At most five terms of |ξ_sen| ≤ 2^14 (and a little, from a
             // turned direction's rounding): a plain add.
-            f = f.plus_unsaturated(Force::along_dir(
+            f = f.plus_unsaturated(Force::along_dir_bounded(
                 sensor_direction(cfg, heading, i),
                 cfg.xi_sen,
             ));

@@ -579,7 +579,7 @@ mod tests {
         // Fails if a capacity, clamp or gain limit grows past it.
         use crate::escape::{MAX_PUSH, VIRTUAL_CAPACITY};
         use crate::fixed::{FORCE_ONE, MAX_SCALED};
-        let gain = 16 * FORCE_ONE as i64 + 2; // the config's limit, and rounding
+        let gain = config::MAX_GAIN as i64 + 2; // the config's limit, and rounding
         let attraction = gain;
         let repulsion = SENSOR_COUNT as i64 * MAX_SCALED as i64;
         let escape = VIRTUAL_CAPACITY as i64 * MAX_PUSH as i64 * u8::MAX as i64;
@@ -588,7 +588,7 @@ mod tests {
         let sum = attraction + repulsion + escape + midpoint + off_sensor;
         assert!(sum < i32::MAX as i64, "{sum}");
         assert!(ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-            .gains_q10(16 * FORCE_ONE + 1, FORCE_ONE, FORCE_ONE)
+            .gains_q10(config::MAX_GAIN + 1, FORCE_ONE, FORCE_ONE)
             .build()
             .is_err());
     }
