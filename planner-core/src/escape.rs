@@ -348,27 +348,33 @@ fn reach_of(v_r: u32, h: u32) -> u16 {
 }
 
 /// Progress monitor and virtual obstacles.
+///
+/// On the AVR its fields stay in this order (`repr(C)`, as `Planner`'s):
+/// the counters and the law first, within a load's reach of the pointer,
+/// the buffers after them (`cargo xtask avr-report`: mean step 12,937 →
+/// 12,900 cycles, text −192 bytes).
 #[derive(Clone, Debug)]
+#[cfg_attr(target_arch = "avr", repr(C))]
 pub struct Escape {
     best_mm: u16,
     since_best: u16,
     drops_since_best: u16,
     dropped: u16,
-    recent: Deque<Point, WINDOW_CAPACITY>,
-    crumbs: Deque<Point, CRUMB_CAPACITY>,
-    /// Where, and for which radius, the trail was last searched and no old
-    /// breadcrumb was near, the trail unchanged since: a rover turning in
-    /// place asks the same question every cycle.
-    no_revisit_at: Option<(Point, u16)>,
-    obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
+    /// The push law of the configuration of the last drop (a planner's
+    /// configuration does not change).
+    law: Law,
     /// The last answer of [`Escape::force_kept`] and its question (robot,
     /// bearing): a rover turning in place asks the same question every
     /// cycle, and a stuck one, surrounded by the obstacles it dropped, is
     /// where the sum costs most. A drop forgets it.
     kept_force: Option<(Point, Angle, Force)>,
-    /// The push law of the configuration of the last drop (a planner's
-    /// configuration does not change).
-    law: Law,
+    /// Where, and for which radius, the trail was last searched and no old
+    /// breadcrumb was near, the trail unchanged since: a rover turning in
+    /// place asks the same question every cycle.
+    no_revisit_at: Option<(Point, u16)>,
+    obstacles: Ring<VirtualObstacle, VIRTUAL_CAPACITY>,
+    recent: Deque<Point, WINDOW_CAPACITY>,
+    crumbs: Deque<Point, CRUMB_CAPACITY>,
 }
 
 impl Default for Escape {
