@@ -283,11 +283,10 @@ impl ConfigBuilder {
         if !increasing || a[1] >= 0 || a[2] != 0 || a[3] <= 0 || a[0] < -90 || a[4] > 90 {
             return Err(ConfigError::SensorAngles);
         }
-        let gains = MAX_GAIN;
         if self.xi_att <= 0
-            || !in_range(self.xi_att, 0, gains)
-            || !in_range(self.xi_mp, 0, gains)
-            || !in_range(self.xi_sen, 0, gains)
+            || !in_range(self.xi_att, 0, MAX_GAIN)
+            || !in_range(self.xi_mp, 0, MAX_GAIN)
+            || !in_range(self.xi_sen, 0, MAX_GAIN)
         {
             return Err(ConfigError::Gain);
         }

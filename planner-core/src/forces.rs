@@ -145,7 +145,7 @@ pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings
     for &i in sensor_group(group) {
         if let Some(Reading::Clear) = readings.get(i) {
             // At most five terms of |ξ_sen| ≤ 2^14 (and a little, from a
-            // turned direction's rounding): a plain add.
+            // turned direction's rounding): the sum never saturates.
             f = f.plus_unsaturated(Force::along_dir_bounded(
                 sensor_direction(cfg, heading, i),
                 cfg.xi_sen,

@@ -526,15 +526,20 @@ mod tests {
         }
     }
 
+    /// 5 V ADCs of 8, 10, 12 and 16 bits.
+    fn adcs() -> [AdcProfile; 4] {
+        [8, 10, 12, 16].map(|bits| AdcProfile {
+            bits,
+            vref_mv: 5_000,
+        })
+    }
+
     #[test]
     fn the_scaled_interpolation_is_the_plain_one() {
         // Every count of the 8-, 10-, 12- and 16-bit ADCs against the
         // interpolation with the bin's own shift.
-        for bits in [8u8, 10, 12, 16] {
-            let adc = AdcProfile {
-                bits,
-                vref_mv: 5_000,
-            };
+        for adc in adcs() {
+            let bits = adc.bits;
             let cal = Calibration::gp2y0a21(adc).unwrap();
             for raw in cal.far_count..=cal.near_count {
                 let (s, i) = (cal.shift, (raw >> cal.shift) as usize);
@@ -557,11 +562,8 @@ mod tests {
         // clamp: the datasheet tables and a steep one (2,000 mm to 20
         // between two adjacent counts, its bins extrapolated to the
         // table's limits), every count of 8- to 16-bit ADCs.
-        for bits in [8u8, 10, 12, 16] {
-            let adc = AdcProfile {
-                bits,
-                vref_mv: 5_000,
-            };
+        for adc in adcs() {
+            let bits = adc.bits;
             let mid = 1u16 << (bits - 1);
             let steep = Calibration::from_points(adc, &[(mid, 2_000), (mid + 1, 20)]).unwrap();
             for cal in [Calibration::gp2y0a21(adc).unwrap(), steep] {

@@ -322,9 +322,8 @@ pub struct Profile {
     pub steps: u64,
     /// Cycles inside the steps, as the profiler counted them.
     pub cycles: u64,
-    /// Cycles of the steps as the firmware timed them itself (Timer1).
-    pub timed: u64,
-    /// Each step's cycles as the firmware timed them, in replay order.
+    /// Each step's cycles as the firmware timed them itself (Timer1), in
+    /// replay order.
     pub step_cycles: Vec<u32>,
     /// Cycles by function the instructions are in.
     pub by_function: Vec<(String, u64)>,
@@ -344,6 +343,13 @@ pub struct Profile {
     pub unbalanced: u64,
     /// The operands of the steps' 32-bit multiplies and divisions.
     pub operands: Operands,
+}
+
+impl Profile {
+    /// Cycles of all the steps as the firmware timed them.
+    pub fn timed(&self) -> u64 {
+        self.step_cycles.iter().map(|&c| u64::from(c)).sum()
+    }
 }
 
 /// [`Profile::by_callee`]'s name for the step's own code (`step_raw` and
@@ -396,7 +402,6 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     Profile {
         steps: sim.steps,
         cycles: sim.hist.values().sum(),
-        timed: step_cycles.iter().map(|&c| u64::from(c)).sum(),
         step_cycles,
         by_function: sorted(inner),
         by_address: {

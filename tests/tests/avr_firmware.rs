@@ -8,7 +8,7 @@
 //! the step costs tens of thousands of cycles (32-bit arithmetic compiles
 //! to long AVR sequences: a 32-bit division ~400 cycles, a square root up
 //! to ~1,200, a virtual obstacle in reach ~950; `avr_costs.rs` prints
-//! them), and the firmware is ~28 KB of flash.
+//! them), and the firmware is ~26 KB of flash.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};

@@ -22,7 +22,7 @@ fn the_profile_accounts_for_the_timed_steps() {
         p.unbalanced, p.steps
     );
     let per_step = p.cycles / p.steps;
-    let timed = p.timed / p.steps;
+    let timed = p.timed() / p.steps;
     println!("avr profile: {per_step} cycles per step, the firmware timed {timed}");
     for (name, c) in p.by_callee.iter().take(8) {
         println!("{:>7}/step  {name}", c / p.steps);

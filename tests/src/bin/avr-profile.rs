@@ -15,7 +15,7 @@ fn main() {
         "avr profile: {} steps, {} cycles per step (the firmware timed {} per step)",
         p.steps,
         p.cycles / steps,
-        p.timed / steps
+        p.timed() / steps
     );
     print_table(
         "by function (where the instruction is)",
