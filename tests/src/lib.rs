@@ -220,6 +220,23 @@ pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
     .collect()
 }
 
+/// For each frame of `traces`, in replay order: whether the rover stands
+/// somewhere new (the first frame of a trace, or after an advance), where
+/// the step works out again what it keeps for a rover turning on the spot
+/// (the goal's distance and bearing, the virtual obstacles' force).
+pub fn at_new_position(traces: &[Trace]) -> Vec<bool> {
+    traces
+        .iter()
+        .flat_map(|t| {
+            t.frames.iter().scan(None, |last, f| {
+                let new = *last != Some(f.pose.position);
+                *last = Some(f.pose.position);
+                Some(new)
+            })
+        })
+        .collect()
+}
+
 /// Mean and worst of a list of counts.
 pub fn mean_worst(v: &[u32]) -> (u32, u32) {
     let worst = v.iter().copied().max().unwrap_or(0);

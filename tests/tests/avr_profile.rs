@@ -6,7 +6,7 @@
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
 use rover_tests::profile::{profile, OWN_CODE};
-use rover_tests::standard_traces;
+use rover_tests::{at_new_position, standard_traces};
 
 #[test]
 fn the_profile_accounts_for_the_timed_steps() {
@@ -21,6 +21,16 @@ fn the_profile_accounts_for_the_timed_steps() {
         "every call the step made returned ({} of {} steps did not)",
         p.unbalanced, p.steps
     );
+    // avr-profile's split by where the rover stands: one flag per timed
+    // step, the first of each trace somewhere new.
+    let new = at_new_position(&traces);
+    assert_eq!(new.len(), p.step_cycles.len(), "one flag per step");
+    let mut first = 0;
+    for t in &traces {
+        assert!(new[first], "{}: its first step is somewhere new", t.name);
+        first += t.frames.len();
+    }
+    assert!(new.contains(&false), "some steps turn on the spot");
     let per_step = p.cycles / p.steps;
     let timed = p.timed() / p.steps;
     println!("avr profile: {per_step} cycles per step, the firmware timed {timed}");

@@ -5,7 +5,7 @@
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
 use rover_tests::profile::profile;
-use rover_tests::standard_traces;
+use rover_tests::{at_new_position, mean_worst, standard_traces};
 
 fn main() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
@@ -50,6 +50,25 @@ fn main() {
         };
         println!("{n:>7} steps  {range}");
         prev = hi;
+    }
+    // Where the budget is missed: a turn on the spot keeps the answers that
+    // depend on the position only; a step somewhere new works them out.
+    println!("\nsteps by where the rover stands (as the firmware timed them):");
+    let new = at_new_position(&traces);
+    for (label, want) in [
+        ("on the spot of the step before", false),
+        ("somewhere new", true),
+    ] {
+        let c: Vec<u32> = (p.step_cycles.iter().zip(&new))
+            .filter(|(_, &n)| n == want)
+            .map(|(&c, _)| c)
+            .collect();
+        let (mean, worst) = mean_worst(&c);
+        let over = c.iter().filter(|&&c| c > 8_000).count();
+        println!(
+            "{:>7} steps  {label}: mean {mean}, worst {worst}, {over} over 8000",
+            c.len()
+        );
     }
     let o = &p.operands;
     let muls: u64 = o.mul.iter().sum();
