@@ -1,6 +1,7 @@
 //! Property tests of the planner's invariants over any input.
 
 use planner_core::command::free_distance_mm;
+use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY};
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Point, Pose, Reading, Status,
 };
@@ -97,5 +98,43 @@ proptest! {
             let out = p.step_raw(Pose::default(), &raw);
             prop_assert!(out.command.step_mm <= range);
         }
+    }
+
+    /// Any bytes on the serial line: the reader never panics, answers once
+    /// per `\n`, and a line it kept whole means what `parse` says of it;
+    /// a longer one is refused.
+    #[test]
+    fn the_line_reader_takes_any_bytes(
+        bytes in prop::collection::vec(
+            prop_oneof![4 => any::<u8>(), 1 => Just(b'\n'), 2 => Just(b' '), 3 => b'0'..=b'9'],
+            0..200,
+        ),
+    ) {
+        let mut reader = LineReader::new();
+        let mut line = Vec::new();
+        for &b in &bytes {
+            let got = reader.feed(b);
+            if b == b'\n' {
+                let want = if line.len() <= LINE_CAPACITY { parse(&line) } else { None };
+                prop_assert_eq!(got, Some(want));
+                line.clear();
+            } else {
+                prop_assert_eq!(got, None);
+                line.push(b);
+            }
+        }
+    }
+
+    /// Every command, written as the protocol's text, parses back to itself.
+    #[test]
+    fn every_command_line_parses_back(x in any::<i16>(), y in any::<i16>(), deg in any::<i16>(), which in 0u8..5) {
+        let (text, want) = match which {
+            0 => (format!("G {x} {y}"), Request::Goal(x, y)),
+            1 => (format!("P {x} {y} {deg}\r"), Request::Pose(x, y, deg)),
+            2 => ("S".to_string(), Request::Stop),
+            3 => ("M".to_string(), Request::Memory),
+            _ => (format!("R  {x} {y}"), Request::Replay(x, y)),
+        };
+        prop_assert_eq!(parse(text.as_bytes()), Some(want), "{}", text);
     }
 }

@@ -153,6 +153,15 @@ impl Scenario {
         if !finite(&self.bounds) || x1 <= x0 || y1 <= y0 {
             return fail("bounds", "must be finite with xmin < xmax and ymin < ymax");
         }
+        // Ours, not FORMAT.md's: the core's positions are signed 16-bit
+        // millimetres, so a world beyond ±32.767 m cannot be driven (and
+        // its reference grid would not fit in memory).
+        if self.bounds.iter().any(|b| b.abs() > MAX_COORD_M) {
+            return fail(
+                "bounds",
+                "must lie within ±32.767 m (the planner's positions are 16-bit millimetres)",
+            );
+        }
         if !(self.robot_radius.is_finite() && self.robot_radius > 0.0 && self.robot_radius < 1.0) {
             return fail("robot_radius", "must be in (0, 1) m");
         }
@@ -218,10 +227,14 @@ impl Scenario {
         Ok(())
     }
 
-    /// Start heading in radians (default: facing the goal).
+    /// Start heading in radians, within [0, 2π) (default: facing the
+    /// goal). Reduced in degrees first: a heading of 1e300° is a finite
+    /// number of degrees, but in radians the simulator's turns would be
+    /// lost in its rounding, and the rover's true heading would part from
+    /// the one its odometry reports.
     pub fn start_heading_rad(&self) -> f64 {
         match self.start_heading {
-            Some(d) => d.to_radians(),
+            Some(d) => d.rem_euclid(360.0).to_radians(),
             None => (self.goal[1] - self.start[1]).atan2(self.goal[0] - self.start[0]),
         }
     }
@@ -271,6 +284,10 @@ fn walk(dir: &Path, out: &mut Vec<PathBuf>) -> std::io::Result<()> {
     }
     Ok(())
 }
+
+/// The largest coordinate a world may have, m: `i16::MAX` millimetres,
+/// the planner core's range.
+pub const MAX_COORD_M: f64 = i16::MAX as f64 / 1000.0;
 
 #[cfg(test)]
 mod tests {
@@ -329,12 +346,44 @@ radius = 0.5
                 "polygon[0].points",
             ),
             (OK.replace("goal = [5.5, 2.5]", ""), "goal"),
+            // Beyond the core's 16-bit millimetres (it was an out-of-memory
+            // abort in the reference grid).
+            (
+                OK.replace("[0.0, 0.0, 6.0, 5.0]", "[0.0, 0.0, 1e9, 5.0]"),
+                "bounds",
+            ),
+            (
+                OK.replace("[0.0, 0.0, 6.0, 5.0]", "[-32.8, 0.0, 6.0, 5.0]"),
+                "bounds",
+            ),
         ];
         for (text, key) in cases {
             let e = parse(&text).unwrap_err();
             assert_eq!(e.key, key, "{e}");
             assert!(!e.rule.is_empty());
         }
+    }
+
+    #[test]
+    fn the_start_heading_is_reduced_to_one_turn() {
+        let at = |deg: &str| {
+            parse(&OK.replace(
+                "goal = [5.5, 2.5]",
+                &format!("goal = [5.5, 2.5]\nstart_heading = {deg}"),
+            ))
+            .unwrap()
+            .start_heading_rad()
+        };
+        assert!((at("-90.0") - 1.5 * std::f64::consts::PI).abs() < 1e-12);
+        assert!((at("450.0") - 0.5 * std::f64::consts::PI).abs() < 1e-12);
+        let huge = at("1e300");
+        assert!((0.0..std::f64::consts::TAU).contains(&huge), "{huge}");
+    }
+
+    #[test]
+    fn a_world_as_wide_as_the_core_reaches_loads() {
+        let wide = OK.replace("[0.0, 0.0, 6.0, 5.0]", "[-32.767, -1.0, 32.767, 5.0]");
+        assert!(parse(&wide).is_ok());
     }
 
     #[test]
