@@ -215,4 +215,26 @@ mod tests {
         assert!(!escape_config(PlannerKind::EapfPlain).enabled);
         assert!(!escape_config(PlannerKind::Apf).enabled);
     }
+
+    /// `SimPlanner::new` expects the configuration to build: it must for
+    /// every radius a scenario may give (`(0, 1)` m, clamped to the core's
+    /// 20 ..= 1,000 mm), on both ADCs, for each sensing planner.
+    #[test]
+    fn every_scenario_radius_builds_a_planner() {
+        let mut sc = crate::scenario::Scenario::parse(
+            "format = 1\nname = \"r\"\nbounds = [0.0, 0.0, 6.0, 5.0]\nstart = [3.0, 2.5]\ngoal = [4.0, 2.5]\n",
+            std::path::Path::new("r.toml"),
+        )
+        .unwrap();
+        for mm in 1..1_000 {
+            sc.robot_radius = mm as f64 / 1000.0;
+            for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
+                for kind in [PlannerKind::Eapf, PlannerKind::EapfPlain, PlannerKind::Apf] {
+                    let p = SimPlanner::new(kind, &sc, adc);
+                    let want = mm.clamp(20, 1_000) as u16;
+                    assert_eq!(p.config().robot_radius_mm(), want, "{mm} mm");
+                }
+            }
+        }
+    }
 }
