@@ -140,6 +140,7 @@ fn main() -> ! {
     let planner = &mut planner;
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());
+    let mut sensors = adc::BackgroundAdc::new();
     let mut driving = false;
     if let Some(Request::Goal(x, y)) = BUILD_GOAL.and_then(|g| protocol::parse(g.as_bytes())) {
         planner.set_goal(Point::new(x, y));
@@ -206,7 +207,11 @@ fn main() -> ! {
         }
         let pose = odometry.pose();
         if executor.is_idle() {
-            let Ok(raw) = adc::BackgroundAdc.read_raw();
+            let Ok(raw) = sensors.read_raw() else {
+                // The sensors are still warming up: wait, motors off.
+                motors::set(&dp, Wheels::STOP);
+                continue;
+            };
             let (step, cycles) = timed_step(planner, pose, &raw);
             let _ = uwriteln!(
                 out,

@@ -20,7 +20,7 @@ use micromath::F32Ext;
 use panic_probe as _;
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::protocol::{self, Request};
-use planner_core::sensors::OneShotSensors;
+use planner_core::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
 use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
 use stm32f4xx_hal::qei::Qei;
@@ -101,6 +101,7 @@ pub fn run() -> ! {
     let mut driving = false;
     let mut lines = protocol::LineReader::new();
     let mut ms: u32 = 0;
+    let mut warm = false;
     defmt::info!("ready");
     let _ = tx.write_str("READY\n");
 
@@ -145,7 +146,10 @@ pub fn run() -> ! {
         last_l = last_l.wrapping_add((dl * COUNTS_PER_TICK) as u16);
         last_r = last_r.wrapping_add((dr * COUNTS_PER_TICK) as u16);
         odometry.update(dl as i16, dr as i16);
-        if !driving {
+        // No step before the sensors' first output (kept once past: `ms`
+        // wraps after 49 days).
+        warm = warm || ms >= SENSOR_WARMUP_MS;
+        if !driving || !warm {
             drive(Wheels::STOP);
             continue;
         }

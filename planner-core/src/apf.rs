@@ -207,7 +207,8 @@ mod tests {
         let c150 = (0..1023)
             .find(|&c| cal.reading(c).range_mm().is_some_and(|mm| mm <= 150))
             .unwrap();
-        let out = p.step_raw(Pose::default(), &[0, 0, c150, 0, 0]);
+        // The others at their phantom level (0.28 V): nothing in range.
+        let out = p.step_raw(Pose::default(), &[57, 57, c150, 57, 57]);
         assert_eq!(out.command.heading.abs_signed(), Angle::from_deg(40).0);
         assert_eq!(out.status, Status::Moving);
     }

@@ -22,7 +22,8 @@
 //! let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().unwrap();
 //! let mut planner = Planner::new(cfg, Point::new(3_000, 0));
 //! let pose = Pose { position: Point::new(0, 0), heading: Angle::ZERO };
-//! let out = planner.step_raw(pose, &[0; 5]); // nothing in sight
+//! // Nothing in sight: each sensor at its phantom level (0.28 V of 5 V).
+//! let out = planner.step_raw(pose, &[57; 5]);
 //! assert_eq!(out.status, Status::Moving);
 //! assert_eq!(out.command.heading, Angle::ZERO);
 //! assert_eq!(out.command.step_mm, 760); // sensor reach minus the widened disc
@@ -565,6 +566,11 @@ mod tests {
             .unwrap()
     }
 
+    /// A sensor's count with nothing in range: its phantom level, 0.28 V
+    /// on the 10-bit 5 V ADC (0 V would be a dead sensor: see
+    /// [`sensors::SIGNAL_FLOOR_MV`]).
+    const FAR: u16 = 57;
+
     fn at(x: i16, y: i16, deg: i16) -> Pose {
         Pose {
             position: Point::new(x, y),
@@ -596,7 +602,7 @@ mod tests {
     #[test]
     fn free_motion_heads_for_the_goal() {
         let mut p = planner(Point::new(0, 3_000));
-        let out = p.step_raw(at(0, 0, 90), &[0; 5]);
+        let out = p.step_raw(at(0, 0, 90), &[FAR; 5]);
         assert_eq!(out.command.heading, Angle::QUARTER);
         // Reach 900 mm less radius and clearance (140 mm).
         assert_eq!(out.command.step_mm, 760);
@@ -615,7 +621,7 @@ mod tests {
             let mut p = planner_with(escape, Point::new(3_000, 0));
             let mut pose = at(0, 0, 0);
             for _ in 0..40 {
-                let out = p.step_raw(pose, &[0; 5]);
+                let out = p.step_raw(pose, &[FAR; 5]);
                 if out.command.heading.sub(Angle::HALF).abs_signed() < Angle::from_deg(1).0 {
                     if pose.heading == out.command.heading {
                         return (p.escape().dropped(), out.command.step_mm);
@@ -642,14 +648,14 @@ mod tests {
         let mut p = planner(Point::new(3_000, 0));
         let mut cycles = 0;
         while p.escape().dropped() == 0 {
-            p.step_raw(at(0, 0, 0), &[0; 5]);
+            p.step_raw(at(0, 0, 0), &[FAR; 5]);
             cycles += 1;
             assert!(cycles < 40, "no drop");
         }
-        let out = p.step_raw(at(0, 0, 150), &[0; 5]);
+        let out = p.step_raw(at(0, 0, 150), &[FAR; 5]);
         assert_eq!(out.command.heading, Angle::HALF);
         assert_eq!(out.command.step_mm, 0, "a 30° turn first");
-        let out = p.step_raw(at(0, 0, 170), &[0; 5]);
+        let out = p.step_raw(at(0, 0, 170), &[FAR; 5]);
         assert_eq!(out.command.heading, Angle::HALF);
         assert_eq!(out.command.step_mm, 140, "a 10° turn and the limit");
     }
@@ -657,7 +663,7 @@ mod tests {
     #[test]
     fn heading_outside_the_sector_turns_first() {
         let mut p = planner(Point::new(-3_000, 0));
-        let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+        let out = p.step_raw(at(0, 0, 0), &[FAR; 5]);
         assert_eq!(out.command.heading, Angle::HALF);
         assert_eq!(out.command.step_mm, 0);
     }
@@ -665,9 +671,9 @@ mod tests {
     #[test]
     fn arrival_and_near_target_step() {
         let mut p = planner(Point::new(500, 0));
-        let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+        let out = p.step_raw(at(0, 0, 0), &[FAR; 5]);
         assert_eq!(out.command.step_mm, 500);
-        let out = p.step_raw(at(470, 0, 0), &[0; 5]);
+        let out = p.step_raw(at(470, 0, 0), &[FAR; 5]);
         assert_eq!(out.status, Status::Arrived);
         assert_eq!(out.command.step_mm, 0);
     }
@@ -678,7 +684,7 @@ mod tests {
         let cal = *p.config().calibration(2).unwrap();
         // An obstacle 300 mm ahead on the front sensor (count for ~300 mm).
         let c300 = count_for(&p, 300);
-        let out = p.step_raw(at(0, 0, 0), &[0, 0, c300, 0, 0]);
+        let out = p.step_raw(at(0, 0, 0), &[FAR, FAR, c300, FAR, FAR]);
         // Attraction 2 forward, repulsion 1/0.4² = 6.25 back: the heading
         // reverses, so the rover turns to the sector's edge (±40°) instead,
         // keeping the obstacle in view, and may step along it if free.
@@ -705,18 +711,18 @@ mod tests {
         let mut blind = planner(goal);
         let face = count_for(&seen, 133);
         for p in [&mut seen, &mut blind] {
-            let out = p.step_raw(at(0, 0, 0), &[0; 5]);
+            let out = p.step_raw(at(0, 0, 0), &[FAR; 5]);
             assert_eq!(out.command.step_mm, 760);
         }
         for gone in [342, 352, 362] {
-            let g = seen.guard_raw(&[0, 0, 0, 0, face], 760 - gone);
+            let g = seen.guard_raw(&[FAR, FAR, FAR, FAR, face], 760 - gone);
             assert_eq!(g, Guard::Continue);
-            blind.guard_raw(&[0; 5], 760 - gone);
+            blind.guard_raw(&[FAR; 5], 760 - gone);
         }
         assert_eq!(seen.flank().points().len(), 1);
         assert!(blind.flank().points().is_empty());
         let steps = [&mut seen, &mut blind].map(|p| {
-            let out = p.step_raw(at(439, 52, -1), &[0; 5]);
+            let out = p.step_raw(at(439, 52, -1), &[FAR; 5]);
             assert_eq!(out.status, Status::Moving);
             out.command.step_mm
         });
@@ -733,7 +739,7 @@ mod tests {
         // The front and the front-left sensors both see something, the
         // front-left nearer.
         let (far, close) = (count_for(&p, 400), count_for(&p, 200));
-        let out = p.step_raw(at(0, 0, 0), &[0, close, far, 0, 0]);
+        let out = p.step_raw(at(0, 0, 0), &[FAR, close, far, FAR, FAR]);
         assert_eq!(out.status, Status::Moving);
         let seen = p.last_collision_points().to_vec();
         assert_eq!(seen.len(), 2);
@@ -752,7 +758,7 @@ mod tests {
         // A wall 150 mm ahead of the front sensor: its repulsion (≈ 16
         // units) dwarfs the attraction (2) and points straight back.
         let near = count_for(&p, 150);
-        let counts = [0, 0, near, 0, 0];
+        let counts = [FAR, FAR, near, FAR, FAR];
         let first = p.step_raw(at(0, 0, 0), &counts).command.heading;
         assert_eq!(first.abs_signed(), Angle::from_deg(40).0);
         // From there the wall is still dead ahead, but the attraction now
@@ -769,19 +775,19 @@ mod tests {
     fn a_second_turn_on_the_spot_in_a_row_becomes_an_advance() {
         // The goal behind the rover and nothing in sight: turn on the spot.
         let mut p = planner(Point::new(-3_000, 0));
-        let out = p.step_raw(at(0, 0, 0), &[0; 5]).command;
+        let out = p.step_raw(at(0, 0, 0), &[FAR; 5]).command;
         assert_eq!((out.heading, out.step_mm), (Angle::HALF, 0));
         // The rover faces 90° instead (as when the force swings between a
         // seen and an unseen obstacle): a second pure turn would start the
         // livelock, so it advances along 90°, half the free distance.
-        let out = p.step_raw(at(0, 0, 90), &[0; 5]).command;
+        let out = p.step_raw(at(0, 0, 90), &[FAR; 5]).command;
         assert_eq!(out.heading, Angle::from_deg(90));
         let c = p.config();
         let free =
             c.sensor_offset_mm() + c.sensor_range_mm() - c.robot_radius_mm() - c.clearance_mm();
         assert_eq!(out.step_mm, free / 2);
         // After that advance, a pure turn is allowed again.
-        let out = p.step_raw(at(0, (free / 2) as i16, 0), &[0; 5]).command;
+        let out = p.step_raw(at(0, (free / 2) as i16, 0), &[FAR; 5]).command;
         assert_eq!(out.step_mm, 0);
     }
 
@@ -804,7 +810,7 @@ mod tests {
         let mut turned = 0u32;
         for _ in 0..30 {
             let deg = heading.to_deg_f64().rem_euclid(360.0);
-            let raw = if open(deg) { [0; 5] } else { [near; 5] };
+            let raw = if open(deg) { [FAR; 5] } else { [near; 5] };
             let pose = Pose {
                 position: Point::new(0, 0),
                 heading,
@@ -840,14 +846,14 @@ mod tests {
                     position: Point::new(0, 0),
                     heading,
                 };
-                let _ = p.step_raw(pose, &[near, 0, 0, 0, 0]);
+                let _ = p.step_raw(pose, &[near, FAR, FAR, FAR, FAR]);
                 heading = heading.add(Angle::from_deg(40));
             }
             let pose = Pose {
                 position: Point::new(0, 0),
                 heading,
             };
-            let _ = p.step_raw(pose, &[0; 5]);
+            let _ = p.step_raw(pose, &[FAR; 5]);
             (p.turned_in_place, p.last_readings()[0])
         };
         let (turned, early) = after(3);
@@ -870,7 +876,7 @@ mod tests {
         // step a cycle: checked. Without the retreat limit, whose turn-first
         // cycles command no step.
         let mut p = planner_without_retreat(Point::new(3_000, 0));
-        let raw = [0, 0, count_for(&p, 300), 0, 0];
+        let raw = [FAR, FAR, count_for(&p, 300), FAR, FAR];
         let mut heading = Angle::ZERO;
         let mut turned = 0u32;
         for _ in 0..20 {
@@ -900,7 +906,7 @@ mod tests {
         // four more cycles when the count carried over: checked). Without
         // the retreat limit, as above.
         let mut p = planner_without_retreat(Point::new(3_000, 0));
-        let raw = [0, 0, count_for(&p, 300), 0, 0];
+        let raw = [FAR, FAR, count_for(&p, 300), FAR, FAR];
         let mut pose = Pose::default();
         let mut cycles_here = 0;
         for cycle in 0..30 {
@@ -926,7 +932,7 @@ mod tests {
     #[test]
     fn implausible_reading_is_a_fault_and_a_stop() {
         let mut p = planner(Point::new(3_000, 0));
-        let out = p.step_raw(at(0, 0, 0), &[0, 0, 5_000, 0, 0]);
+        let out = p.step_raw(at(0, 0, 0), &[FAR, FAR, 5_000, FAR, FAR]);
         assert_eq!(out.status, Status::SensorFault);
         assert_eq!(out.command.step_mm, 0);
     }
@@ -934,11 +940,11 @@ mod tests {
     #[test]
     fn sensor_trait_and_guard() {
         let mut p = planner(Point::new(3_000, 0));
-        let mut s = ScriptedSensors::new(&[[0; 5]]);
+        let mut s = ScriptedSensors::new(&[[FAR; 5]]);
         assert!(p.step(at(0, 0, 0), &mut s).is_ok());
         assert!(p.step(at(0, 0, 0), &mut s).is_err());
-        assert_eq!(p.guard_raw(&[0; 5], 700), Guard::Continue);
-        assert_eq!(p.guard_raw(&[0, 0, 500, 0, 0], 700), Guard::Stop);
+        assert_eq!(p.guard_raw(&[FAR; 5], 700), Guard::Continue);
+        assert_eq!(p.guard_raw(&[FAR, FAR, 500, FAR, FAR], 700), Guard::Stop);
     }
 
     #[test]
@@ -947,18 +953,18 @@ mod tests {
         let mut p = planner(Point::new(3_000, 0));
         let mut status = Status::Moving;
         for _ in 0..2_000 {
-            status = p.step_raw(at(0, 0, 180), &[0; 5]).status;
+            status = p.step_raw(at(0, 0, 180), &[FAR; 5]).status;
             if status == Status::Unreachable {
                 break;
             }
         }
         assert_eq!(status, Status::Unreachable);
         assert_eq!(
-            p.step_raw(at(10, 0, 0), &[0; 5]).status,
+            p.step_raw(at(10, 0, 0), &[FAR; 5]).status,
             Status::Unreachable
         );
         p.set_goal(Point::new(0, 3_000));
-        assert_eq!(p.step_raw(at(0, 0, 90), &[0; 5]).status, Status::Moving);
+        assert_eq!(p.step_raw(at(0, 0, 90), &[FAR; 5]).status, Status::Moving);
     }
 
     proptest::proptest! {

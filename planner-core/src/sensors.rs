@@ -107,6 +107,20 @@ pub enum CalibrationError {
     DistanceOutOfRange,
 }
 
+/// The least output a working sensor gives, mV. A Sharp IR sensor puts out
+/// its phantom level (0.25–0.4 V) with nothing in range (ALGORITHMS.md §5),
+/// so a count below 0.1 V is no distance: a broken signal wire (the pin
+/// pulled to ground), an unpowered sensor or a shorted output. Read as
+/// "clear" it would open the way; it is flagged implausible instead, and
+/// the planner stops with a sensor fault (§5: "flags implausible
+/// readings"). A count above the ADC's full scale is implausible too.
+pub const SIGNAL_FLOOR_MV: u16 = 100;
+
+/// How long after power-up a sensor gives its first output, ms: one
+/// measuring period (GP2Y0A21YK0F: 38.3 ± 9.6 ms). A firmware plans nothing
+/// on counts read before it.
+pub const SENSOR_WARMUP_MS: u32 = 48;
+
 /// Raw count → distance for one sensor, resampled at build time onto
 /// `CAL_BINS` equal bins of counts so that a lookup is a shift and one
 /// 16-bit multiply (no division on the AVR).
@@ -122,6 +136,9 @@ pub struct Calibration {
     near_count: u16,
     /// Counts below this are farther than the farthest calibrated distance.
     far_count: u16,
+    /// Counts below this are implausible ([`SIGNAL_FLOOR_MV`]; 0 for a table
+    /// that reaches below it).
+    floor_count: u16,
     /// Distance in mm at count `i << shift` (the end segments extrapolated).
     mm: [u16; CAL_BINS + 1],
 }
@@ -203,11 +220,18 @@ impl Calibration {
             };
             i += 1;
         }
+        // A table that reaches below the floor says its sensor's output
+        // does: then no count is too low.
+        let floor_count = match adc.counts_for_mv(SIGNAL_FLOOR_MV) {
+            floor if floor < sorted[0].0 => floor,
+            _ => 0,
+        };
         Ok(Calibration {
             shift,
             full_scale,
             near_count: sorted[n - 1].0,
             far_count: sorted[0].0,
+            floor_count,
             mm,
         })
     }
@@ -226,12 +250,17 @@ impl Calibration {
 
     /// Classify one raw count.
     pub fn reading(&self, raw: u16) -> Reading {
-        if raw > self.full_scale {
+        if raw < self.far_count {
+            // Below the floor: a silent sensor, not a far one.
+            if raw < self.floor_count {
+                Reading::Implausible
+            } else {
+                Reading::Clear
+            }
+        } else if raw > self.full_scale {
             Reading::Implausible
         } else if raw > self.near_count {
             Reading::TooClose
-        } else if raw < self.far_count {
-            Reading::Clear
         } else {
             // The count as a 16-bit fraction of full scale (`raw < 2^bits`,
             // `bits = shift + BIN_BITS`): the bin is its top `BIN_BITS`,
@@ -274,6 +303,12 @@ impl Calibration {
     /// Counts per bin as a shift.
     pub fn shift(&self) -> u8 {
         self.shift
+    }
+
+    /// Counts below this are implausible: a silent sensor
+    /// ([`SIGNAL_FLOOR_MV`]; 0 for a table that reaches below it).
+    pub fn floor_count(&self) -> u16 {
+        self.floor_count
     }
 
     /// `(far_count, near_count)`: the trusted window of counts.
@@ -581,10 +616,36 @@ mod tests {
         }
     }
 
+    /// A dead or unplugged sensor (0 V, or anything under 0.1 V) is a
+    /// fault on both ADCs; the phantom level a working sensor gives with
+    /// nothing in range (0.25 V at the least) is clear.
+    #[test]
+    fn a_silent_sensor_is_implausible_and_the_phantom_level_clear() {
+        for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
+            let cal = Calibration::gp2y0a21(adc).unwrap();
+            for mv in [0, 50, 90] {
+                let r = cal.reading(adc.counts_for_mv(mv));
+                assert_eq!(r, Reading::Implausible, "{adc:?} {mv} mV");
+            }
+            for mv in [101, 250, 300, 400] {
+                let r = cal.reading(adc.counts_for_mv(mv));
+                assert_eq!(r, Reading::Clear, "{adc:?} {mv} mV");
+            }
+        }
+        // A table whose far end is below the floor keeps its whole range.
+        let adc = AdcProfile::AVR_10BIT_5V;
+        let cal = Calibration::from_points(adc, &[(10, 1_500), (500, 100)]).unwrap();
+        assert!(matches!(cal.reading(10), Reading::Range(_)));
+        assert_eq!(cal.reading(0), Reading::Clear);
+    }
+
     #[test]
     fn classification_at_the_edges() {
         let cal = avr();
-        assert_eq!(cal.reading(0), Reading::Clear);
+        // 0.1 V is count 20 of 1,023 at 5 V: below it, no sensor answers.
+        assert_eq!(cal.reading(0), Reading::Implausible);
+        assert_eq!(cal.reading(19), Reading::Implausible);
+        assert_eq!(cal.reading(20), Reading::Clear);
         assert_eq!(cal.reading(85), Reading::Clear);
         assert!(matches!(cal.reading(86), Reading::Range(_)));
         assert!(matches!(cal.reading(532), Reading::Range(_)));

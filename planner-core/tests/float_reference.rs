@@ -121,7 +121,13 @@ fn fixed_point_matches_the_float_reference() {
         let (mut x, mut y, mut h) = (rnd(2_000) as i16, rnd(2_000) as i16, rnd(65_536) as u16);
         let mut cycles = Vec::new();
         for _ in 0..6 {
-            let raw = [0u16; 5].map(|_| if rnd(3) == 0 { 0 } else { 60 + rnd(480) as u16 });
+            // A third at the phantom level (nothing in range), a few silent
+            // (0 V: a sensor fault), the rest anywhere in the window.
+            let raw = [0u16; 5].map(|_| match rnd(60) {
+                0 => 0,
+                1..=20 => 57,
+                _ => 60 + rnd(480) as u16,
+            });
             cycles.push(((x, y, h), raw));
             x += rnd(300) as i16;
             y += rnd(300) as i16;

@@ -156,6 +156,9 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         if raw > near {
             return R::TooClose;
         }
+        if raw < cal.floor_count() {
+            return R::Implausible;
+        }
         if raw < far {
             return R::Clear;
         }

@@ -219,6 +219,17 @@ pub enum LoopOutcome {
 /// (`planner_core::drive::Body::REFERENCE`), wheels at `duty/255 · 0.4 m/s`.
 pub const WHEEL_SPEED_MPS: f64 = 0.4;
 
+/// A sensor unplugged during a [`drive_with`]: from `at_s` emulated
+/// seconds on, its ADC pin reads 0 V (a broken signal wire, the pin pulled
+/// to ground).
+#[derive(Clone, Copy, Debug)]
+pub struct Unplug {
+    /// Which sensor (0 ..= 4, right to left).
+    pub sensor: usize,
+    /// When, emulated seconds.
+    pub at_s: f64,
+}
+
 /// Result of [`drive`].
 #[derive(Debug)]
 pub struct LoopRun {
@@ -232,6 +243,10 @@ pub struct LoopRun {
     pub steps: usize,
     /// Final true distance to the goal, m.
     pub to_goal_m: f64,
+    /// After a stop (arrival, unreachable, sensor fault), over the 100 ms
+    /// that follow it from 2 ms on: the PWM samples that were high (0: the
+    /// motors stayed off), and how far the rover moved, m.
+    pub after_stop: Option<(u32, f64)>,
 }
 
 /// Drive a scenario closed-loop: the emulated firmware reads the five ADC
@@ -241,6 +256,16 @@ pub struct LoopRun {
 /// the rover by what the pins say (duty measured by sampling the PWM pins
 /// every 16 µs) and checks collisions with the swept disc.
 pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRun {
+    drive_with(sc, seed, max_s, None)
+}
+
+/// [`drive`], with a sensor unplugged on the way if `unplug` says so.
+pub fn drive_with(
+    sc: &sim_host::scenario::Scenario,
+    seed: u64,
+    max_s: f64,
+    unplug: Option<Unplug>,
+) -> LoopRun {
     use sim_host::geom::V2;
     use sim_host::sensor::{SensorMode, VirtualSensors};
     use sim_host::world::World;
@@ -287,9 +312,14 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
         // firmware sees what a 5 V AVCC would give.
         sensors.read(&world, p, h, t);
         for (i, v) in sensors.volts().iter().enumerate() {
-            let mv = (v * 1_000.0 * 3_300.0 / 5_000.0)
-                .round()
-                .clamp(0.0, 3_300.0) as u32;
+            let unplugged = unplug.is_some_and(|u| u.sensor == i && t >= u.at_s);
+            let mv = if unplugged {
+                0
+            } else {
+                (v * 1_000.0 * 3_300.0 / 5_000.0)
+                    .round()
+                    .clamp(0.0, 3_300.0) as u32
+            };
             let mut pins = a.avr.pins();
             match i {
                 0 => pins.adc0().set_mv(mv),
@@ -354,11 +384,42 @@ pub fn drive(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRu
             }
         }
     };
+    // The firmware stops the motors right after the telemetry line that
+    // says why: give it 2 ms, then watch the PWM pins for 100 ms, the rover
+    // moving as they say.
+    let after_stop = matches!(
+        outcome,
+        LoopOutcome::Reached | LoopOutcome::Unreachable | LoopOutcome::SensorFault
+    )
+    .then(|| {
+        let stopped_at = p;
+        let mut high = 0;
+        for ms in 0..102 {
+            let (mut high_l, mut high_r) = (0u32, 0u32);
+            for _ in 0..62 {
+                a.avr.run_for(256u64);
+                let mut pins = a.avr.pins();
+                high_l += pins.pd6().is_high() as u32;
+                high_r += pins.pd5().is_high() as u32;
+            }
+            let mut pins = a.avr.pins();
+            let dir_l = pins.pd7().is_high() as i32 - pins.pb0().is_high() as i32;
+            let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
+            let vl = dir_l as f64 * high_l as f64 / 62.0 * WHEEL_SPEED_MPS;
+            let vr = dir_r as f64 * high_r as f64 / 62.0 * WHEEL_SPEED_MPS;
+            (p, h) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
+            if ms >= 2 {
+                high += high_l + high_r;
+            }
+        }
+        (high, p.dist(stopped_at))
+    });
     LoopRun {
         outcome,
         seconds: t,
         path_m: path,
         steps,
         to_goal_m: p.dist(goal),
+        after_stop,
     }
 }

@@ -2,7 +2,7 @@
 //! worlds and sensors on its ADC pins, its motor pins and encoder inputs
 //! closing the loop (see `rover_tests::avr::drive`).
 
-use rover_tests::avr::{drive, LoopOutcome};
+use rover_tests::avr::{drive, drive_with, LoopOutcome, Unplug};
 use rover_tests::scenario;
 
 fn reaches(rel: &str) {
@@ -21,6 +21,10 @@ fn reaches(rel: &str) {
     // Allow 50 mm plus 0.5 % of the path. (Summing each wheel's travel
     // regardless of direction, as the harness first did, made an edge of
     // every back-and-forth across none: 0.68 m off after 30 m.)
+    // Arrived, it stays put: no PWM pulse after the line that says so.
+    let (high, moved_m) = run.after_stop.expect("a stop");
+    assert_eq!(high, 0, "{}: motor pulses after arriving", sc.name);
+    assert!(moved_m < 1e-3, "{}: moved {moved_m} m", sc.name);
     let bound_m = 0.05 + 0.005 * run.path_m;
     assert!(
         run.to_goal_m < bound_m,
@@ -40,4 +44,35 @@ fn drives_the_u_trap_to_the_goal() {
 #[test]
 fn drives_a_paper_world_to_the_goal() {
     reaches("paper/env1-ex1.toml");
+}
+
+/// A sensor unplugged on the way (its pin at 0 V, no reading a working
+/// sensor gives): the firmware reports a sensor fault and stops the motors
+/// for good, rather than reading the dead beam as a free way.
+fn unplugged_sensor_stops_the_rover(sensor: usize, at_s: f64) {
+    let sc = scenario("paper/env1-ex1.toml");
+    let run = drive_with(&sc, 1, 60.0, Some(Unplug { sensor, at_s }));
+    println!(
+        "sensor {sensor} unplugged at {at_s} s: {:?} at {:.2} s, {} steps, {:.2} m driven; after: {:?}",
+        run.outcome, run.seconds, run.steps, run.path_m, run.after_stop
+    );
+    assert_eq!(run.outcome, LoopOutcome::SensorFault);
+    assert!(
+        run.seconds >= at_s && run.seconds < at_s + 1.5,
+        "reported at {:.2} s",
+        run.seconds
+    );
+    let (high, moved_m) = run.after_stop.expect("a stop");
+    assert_eq!(high, 0, "motor pulses after the fault");
+    assert!(moved_m < 1e-3, "moved {moved_m} m after the fault");
+}
+
+#[test]
+fn an_unplugged_front_sensor_stops_the_rover() {
+    unplugged_sensor_stops_the_rover(2, 3.0);
+}
+
+#[test]
+fn an_unplugged_side_sensor_stops_the_rover() {
+    unplugged_sensor_stops_the_rover(0, 5.5);
 }
