@@ -76,3 +76,19 @@ fn an_unplugged_front_sensor_stops_the_rover() {
 fn an_unplugged_side_sensor_stops_the_rover() {
     unplugged_sensor_stops_the_rover(0, 5.5);
 }
+
+/// A goal inside a closed wall: the firmware gives up (`unreachable`, the
+/// core's give-up budget) without touching the wall, and stops its motors.
+#[test]
+fn a_walled_in_goal_is_reported_unreachable() {
+    let sc = scenario("traps/walled-in.toml");
+    let run = drive(&sc, 1, 900.0);
+    println!(
+        "{}: {:?} after {:.1} s, {} steps, {:.2} m driven; after: {:?}",
+        sc.name, run.outcome, run.seconds, run.steps, run.path_m, run.after_stop
+    );
+    assert_eq!(run.outcome, LoopOutcome::Unreachable, "{}", sc.name);
+    let (high, moved_m) = run.after_stop.expect("a stop");
+    assert_eq!(high, 0, "motor pulses after giving up");
+    assert!(moved_m < 1e-3, "moved {moved_m} m after giving up");
+}
