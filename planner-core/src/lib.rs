@@ -34,7 +34,8 @@
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
 //! points), [`escape`] (virtual obstacles), [`command`] (output and the
 //! safety rule), [`config`]; [`liquid`] (the liquid-movement planner over a
-//! known map); [`drive`] (odometry and the turn-then-advance
+//! known map), [`route`] (the Dijkstra + potential-field route layer over a
+//! known map's waypoint graph); [`drive`] (odometry and the turn-then-advance
 //! executor the firmwares share), [`protocol`] (their serial command lines).
 //!
 //! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
@@ -55,6 +56,7 @@ pub mod liquid;
 pub mod memory;
 pub mod protocol;
 pub mod ring;
+pub mod route;
 pub mod sensors;
 
 pub use command::{Command, Guard, Output, Status};

@@ -6,7 +6,7 @@
 //! [`geom`] and [`world`] (exact ray casting and swept collision),
 //! [`sensor`] (the IR curve, noise, 38 ms updates), [`sim`] (rover, guard,
 //! odometry, outcomes), [`reference`](mod@reference) (shortest paths), [`planners`] (unit
-//! conversion to the core), [`bench`](mod@bench), [`svg`], [`generate`].
+//! conversion to the core), [`routemap`] (the `route` planner's waypoint graph), [`bench`](mod@bench), [`svg`], [`generate`].
 //!
 //! Crates: `serde` + `toml` for scenario files (typed, unknown keys refused),
 //! `clap` for the CLI, `rayon` and `indicatif` for parallel benches with a
@@ -17,6 +17,7 @@ pub mod generate;
 pub mod geom;
 pub mod planners;
 pub mod reference;
+pub mod routemap;
 pub mod scenario;
 pub mod sensor;
 pub mod sim;

@@ -3,9 +3,11 @@
 //! core's millimetres and binary angles) and back.
 
 use crate::geom::V2;
+use crate::routemap::{self, ROUTE_EDGES, ROUTE_NODES};
 use crate::scenario::Scenario;
 use planner_core::apf::{ApfConfig, ApfPlanner};
 use planner_core::fixed::Point;
+use planner_core::route::{RouteConfig, RoutePlanner};
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Pose, RawCounts, Status,
 };
@@ -25,6 +27,10 @@ pub enum PlannerKind {
     Liquid,
     /// The same, online (go on from the local minimum).
     LiquidOnline,
+    /// The route layer over the known map (Dijkstra's candidates, the
+    /// safest within 25 % of the shortest), driven by the `eapf` planner
+    /// with its sensors from waypoint to waypoint.
+    Route,
 }
 
 impl PlannerKind {
@@ -41,6 +47,7 @@ impl PlannerKind {
             PlannerKind::Apf => "apf",
             PlannerKind::Liquid => "liquid",
             PlannerKind::LiquidOnline => "liquid-online",
+            PlannerKind::Route => "route",
         }
     }
 }
@@ -85,7 +92,7 @@ pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
 /// retreat limit included) for `eapf`, off otherwise.
 fn escape_config(kind: PlannerKind) -> EscapeConfig {
     EscapeConfig {
-        enabled: kind == PlannerKind::Eapf,
+        enabled: matches!(kind, PlannerKind::Eapf | PlannerKind::Route),
         ..EscapeConfig::default()
     }
 }
@@ -94,6 +101,7 @@ fn escape_config(kind: PlannerKind) -> EscapeConfig {
 enum Core {
     Eapf(Box<Planner>),
     Apf(Box<ApfPlanner>),
+    Route(Box<RoutePlanner<ROUTE_NODES, ROUTE_EDGES>>),
 }
 
 /// A planner under simulation.
@@ -116,6 +124,12 @@ impl SimPlanner {
             PlannerKind::Apf => {
                 Core::Apf(Box::new(ApfPlanner::new(cfg, ApfConfig::default(), goal)))
             }
+            PlannerKind::Route => Core::Route(Box::new(RoutePlanner::new(
+                cfg,
+                routemap::build(sc),
+                RouteConfig::default(),
+                goal,
+            ))),
             _ => Core::Eapf(Box::new(Planner::new(cfg, goal))),
         };
         SimPlanner { core }
@@ -125,6 +139,7 @@ impl SimPlanner {
         match &self.core {
             Core::Eapf(p) => p.config(),
             Core::Apf(p) => p.config(),
+            Core::Route(p) => p.planner().config(),
         }
     }
 
@@ -147,6 +162,7 @@ impl SimPlanner {
         let out = match &mut self.core {
             Core::Eapf(p) => p.step_raw(pose, raw),
             Core::Apf(p) => p.step_raw(pose, raw),
+            Core::Route(p) => p.step_raw(pose, raw),
         };
         SimCommand {
             heading: to_rad(out.command.heading),
@@ -161,26 +177,45 @@ impl SimPlanner {
         let g = match &mut self.core {
             Core::Eapf(p) => p.guard_raw(raw, mm),
             Core::Apf(p) => p.guard_raw(raw, mm),
+            Core::Route(p) => p.guard_raw(raw, mm),
         };
         g == planner_core::Guard::Continue
     }
 
     /// Collision points of the last cycle, m.
     pub fn last_collision_points(&self) -> Vec<V2> {
-        match &self.core {
-            Core::Eapf(p) => p
+        match self.eapf() {
+            Some(p) => p
                 .last_collision_points()
                 .iter()
                 .map(|&q| to_v2(q))
                 .collect(),
-            Core::Apf(_) => Vec::new(),
+            None => Vec::new(),
+        }
+    }
+
+    /// The route over the known map (planner `route`), waypoints then the
+    /// goal, m; empty for the others.
+    pub fn route(&self) -> Vec<V2> {
+        match &self.core {
+            Core::Route(p) => p.route().map(to_v2).collect(),
+            _ => Vec::new(),
+        }
+    }
+
+    /// The EAPF planner, if this one is or drives one.
+    fn eapf(&self) -> Option<&Planner> {
+        match &self.core {
+            Core::Eapf(p) => Some(p),
+            Core::Route(p) => Some(p.planner()),
+            Core::Apf(_) => None,
         }
     }
 
     /// (remembered points, midpoint of the active ones with the robot at
     /// `robot`, virtual obstacles, virtual obstacles dropped in all).
     pub fn diagnostics(&self, robot: V2) -> Diagnostics {
-        let Core::Eapf(core) = &self.core else {
+        let Some(core) = self.eapf() else {
             return (Vec::new(), None, Vec::new(), 0);
         };
         let rem = core.memory().iter().map(|r| to_v2(r.point)).collect();
@@ -212,6 +247,7 @@ mod tests {
             (eapf.retreat_mm, eapf.retreat_per_drop_mm),
             (escape::RETREAT_MM, escape::RETREAT_PER_DROP_MM)
         );
+        assert_eq!(escape_config(PlannerKind::Route), eapf);
         assert!(!escape_config(PlannerKind::EapfPlain).enabled);
         assert!(!escape_config(PlannerKind::Apf).enabled);
     }

@@ -121,6 +121,9 @@ pub struct RunResult {
     pub virtual_dropped: usize,
     /// Cycles whose status was a sensor fault.
     pub sensor_faults: usize,
+    /// The route over the known map at the end (planner `route`): its
+    /// waypoints, then the goal; empty for the other planners.
+    pub route: Vec<V2>,
 }
 
 /// The true motion of a run: trace rows, driven length, smallest clearance.
@@ -182,6 +185,7 @@ impl Track {
             virtual_obstacles: Vec::new(),
             virtual_dropped: 0,
             sensor_faults: 0,
+            route: Vec::new(),
         }
     }
 }
@@ -333,6 +337,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         virtual_obstacles,
         virtual_dropped,
         sensor_faults: faults,
+        route: planner.route(),
         ..track.into_result(outcome, steps)
     }
 }

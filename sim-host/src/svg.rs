@@ -105,6 +105,23 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
             poly(r, &px)
         );
     }
+    // The route over the known map (planner `route`), and its waypoints.
+    if !run.route.is_empty() {
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#bf8700" stroke-width="1.5" stroke-dasharray="2 3"/>"##,
+            poly(&run.route, &px)
+        );
+        for q in &run.route {
+            let (a, b) = px(*q);
+            let _ = writeln!(
+                s,
+                r##"<rect x="{:.1}" y="{:.1}" width="6" height="6" fill="#bf8700"/>"##,
+                a - 3.0,
+                b - 3.0
+            );
+        }
+    }
     // Driven path, with the robot's width as a faint band.
     let path: Vec<V2> = run.trace.iter().map(|t| V2::new(t.x, t.y)).collect();
     let _ = writeln!(
@@ -177,6 +194,15 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
         ("#8250df", "remembered / midpoint"),
         ("#54aeff", "virtual obstacles"),
     ];
+    let route_item = [("#bf8700", "route")];
+    let items: Vec<_> = items
+        .iter()
+        .chain(if run.route.is_empty() {
+            &[][..]
+        } else {
+            &route_item[..]
+        })
+        .collect();
     let mut lx = pw - 10.0;
     for (c, label) in items.iter().rev() {
         lx -= 8.0 * label.len() as f64 + 22.0;

@@ -98,3 +98,38 @@ fn classical_apf_fails_where_the_papers_say() {
     assert_ne!(outcome("u-trap"), Outcome::Reached);
     assert_ne!(outcome("two-obstacles"), Outcome::Reached);
 }
+
+/// The route layer over the known map (`route`) drives the traps where the
+/// sensing planner alone detours (the u-trap, the dead end, the rooms and
+/// the comb: 2.6–6.0× the reference with `eapf`, docs/bench.md) within
+/// 1.25× of the shortest path, without a collision; the walled-in goal has
+/// no route, and is still not reached.
+#[test]
+fn the_route_layer_drives_the_traps_near_the_shortest_path() {
+    use sim_host::planners::PlannerKind;
+    let cfg = SimConfig {
+        planner: PlannerKind::Route,
+        ..SimConfig::default()
+    };
+    let files: Vec<PathBuf> = [
+        "traps/u-trap.toml",
+        "traps/dead-end.toml",
+        "traps/rooms.toml",
+        "traps/comb.toml",
+        "traps/walled-in.toml",
+    ]
+    .iter()
+    .map(|f| library().join(f))
+    .collect();
+    let rows = run_all(&files, &cfg, false).unwrap();
+    for r in &rows {
+        assert_ne!(r.outcome, Outcome::Collision, "{} collided", r.name);
+        if r.solvable {
+            assert_eq!(r.outcome, Outcome::Reached, "{}", r.name);
+            let ratio = r.ratio().unwrap();
+            assert!(ratio <= 1.25, "{}: {ratio:.2}× the reference", r.name);
+        } else {
+            assert_ne!(r.outcome, Outcome::Reached, "{}", r.name);
+        }
+    }
+}

@@ -1,0 +1,679 @@
+//! The route layer for a known map (ALGORITHMS.md §4, after Al-Ansarry,
+//! Al-Darraji & Honi 2023): Dijkstra finds candidate routes on a waypoint
+//! graph, the potential field scores each candidate's safety and the safest
+//! is taken; the online EAPF planner then drives from waypoint to waypoint
+//! with its sensors, and a leg it cannot drive (its planner says
+//! unreachable) is blocked and the route planned again from where the
+//! rover stands: the paper's switch to another path when one is blocked.
+//!
+//! Allocation-free: the map's capacity is in its type (`N` nodes, `E`
+//! edges; a few dozen fit an MCU's flash, the simulator uses hundreds), and
+//! a search keeps its work on the stack (7 bytes a node, 1 an edge). A
+//! search is `O(N·E)`: fine for the maps it is meant for, and run only at
+//! the start and when a leg is blocked.
+//!
+//! Ours, where the paper's page is silent:
+//! - A map gives each edge its clearance: the least distance from the
+//!   segment to any obstacle, worked out by whoever builds the map (the
+//!   simulator from the world's geometry). Safety is scored from it, so the
+//!   core needs no obstacle list.
+//! - Safety is the repulsive potential of eq. 3 (Khatib's form,
+//!   `(1/c − 1/ρ₀)²` for a clearance `c` below the influence distance
+//!   `ρ₀`), taken along each edge: an edge's risk is its length times
+//!   `((ρ₀ − c)/c)²` (the same form times `ρ₀²`), a route's the sum.
+//! - The candidates: the shortest route, then up to
+//!   `RouteConfig::candidates − 1` more, each the shortest once the edges
+//!   of those found are made twice as long (so each differs from the last).
+//!   Of those no longer than `1 + slack` times the shortest, the one of
+//!   least risk is taken (the shorter on a tie): safety is bought with a
+//!   bounded detour only.
+//! - A waypoint counts as passed within `pass_mm`, the goal as reached
+//!   within the planner's goal tolerance.
+//! - No route on the graph is no proof that there is no way (a coarse
+//!   graph misses a narrow gap): the planner then drives to the goal
+//!   directly, and its own give-up budget (the escape's) decides whether
+//!   the goal is unreachable.
+
+use crate::config::Config;
+use crate::fixed::{hypot, Point};
+use crate::{Guard, Output, Planner, Pose, RawCounts, Status};
+
+/// Why a map refused a node or an edge.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum MapError {
+    /// No room left (the map's capacity).
+    Full,
+    /// An edge names a node the map does not have, or joins a node to
+    /// itself.
+    BadEdge,
+}
+
+/// An edge of the waypoint graph, usable both ways.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Edge {
+    /// One end (a node index).
+    pub a: u16,
+    /// The other end.
+    pub b: u16,
+    /// The least distance from the segment to any obstacle, mm.
+    pub clearance_mm: u16,
+    /// Its length, mm (worked out when it is added).
+    pub length_mm: u16,
+    /// Found undrivable: no route uses it.
+    pub blocked: bool,
+}
+
+/// A waypoint graph of at most `N` nodes and `E` edges, world mm.
+#[derive(Clone, Debug)]
+pub struct RouteMap<const N: usize, const E: usize> {
+    nodes: heapless::Vec<Point, N>,
+    edges: heapless::Vec<Edge, E>,
+}
+
+impl<const N: usize, const E: usize> Default for RouteMap<N, E> {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// How routes are chosen and followed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct RouteConfig {
+    /// The potential's influence distance ρ₀, mm: an edge farther than
+    /// this from every obstacle carries no risk.
+    pub influence_mm: u16,
+    /// How much longer than the shortest a safer route may be, percent.
+    pub slack_pct: u16,
+    /// How many candidates Dijkstra offers (1: the shortest only; at most
+    /// 8 are looked at).
+    pub candidates: u8,
+    /// A waypoint is passed once the rover is this near it, mm.
+    pub pass_mm: u16,
+}
+
+impl Default for RouteConfig {
+    /// ρ₀ = 300 mm (the classical APF baseline's ρ, `apf`), 25 % slack
+    /// (the product's path-length aim), four candidates, waypoints passed
+    /// within 250 mm (a step or so: the planner does not stop at each).
+    fn default() -> Self {
+        RouteConfig {
+            influence_mm: 300,
+            slack_pct: 25,
+            candidates: 4,
+            pass_mm: 250,
+        }
+    }
+}
+
+/// A route: node indices from start to goal, its length and risk.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct Route<const N: usize> {
+    /// The nodes in order.
+    pub nodes: heapless::Vec<u16, N>,
+    /// Summed edge lengths, mm.
+    pub length_mm: u32,
+    /// Summed edge risks (see the module docs).
+    pub risk: u64,
+}
+
+/// Nothing: a node index no node has.
+const NONE: u16 = u16::MAX;
+
+impl<const N: usize, const E: usize> RouteMap<N, E> {
+    /// An empty map.
+    pub const fn new() -> Self {
+        RouteMap {
+            nodes: heapless::Vec::new(),
+            edges: heapless::Vec::new(),
+        }
+    }
+
+    /// Add a waypoint; its index.
+    pub fn add_node(&mut self, p: Point) -> Result<u16, MapError> {
+        // Indices are u16 and `NONE` is reserved.
+        if self.nodes.len() >= (NONE as usize).min(N) {
+            return Err(MapError::Full);
+        }
+        self.nodes.push(p).map_err(|_| MapError::Full)?;
+        Ok(self.nodes.len() as u16 - 1)
+    }
+
+    /// Join nodes `a` and `b` by a straight edge with `clearance_mm` to
+    /// the nearest obstacle.
+    pub fn add_edge(&mut self, a: u16, b: u16, clearance_mm: u16) -> Result<(), MapError> {
+        let (Some(&pa), Some(&pb)) = (self.nodes.get(a as usize), self.nodes.get(b as usize))
+        else {
+            return Err(MapError::BadEdge);
+        };
+        if a == b {
+            return Err(MapError::BadEdge);
+        }
+        let (dx, dy) = pa.to(pb);
+        let edge = Edge {
+            a,
+            b,
+            clearance_mm,
+            length_mm: hypot(dx, dy),
+            blocked: false,
+        };
+        self.edges.push(edge).map_err(|_| MapError::Full)
+    }
+
+    /// The waypoints.
+    pub fn nodes(&self) -> &[Point] {
+        &self.nodes
+    }
+
+    /// The edges.
+    pub fn edges(&self) -> &[Edge] {
+        &self.edges
+    }
+
+    /// The node nearest `p` (the first of equals), if any.
+    pub fn nearest_node(&self, p: Point) -> Option<u16> {
+        let d = |q: &Point| {
+            let (dx, dy) = p.to(*q);
+            (dx as i64 * dx as i64 + dy as i64 * dy as i64) as u64
+        };
+        let (i, _) = self
+            .nodes
+            .iter()
+            .enumerate()
+            .min_by_key(|&(i, q)| (d(q), i))?;
+        Some(i as u16)
+    }
+
+    /// Block the edges between `a` and `b` (either way): routes avoid them.
+    pub fn block(&mut self, a: u16, b: u16) {
+        for e in self.edges.iter_mut() {
+            if (e.a, e.b) == (a, b) || (e.a, e.b) == (b, a) {
+                e.blocked = true;
+            }
+        }
+    }
+
+    /// An edge's risk: `length · ((ρ₀ − c)/c)²` for a clearance `c`
+    /// below ρ₀, else 0 (the repulsive potential, module docs). A clearance
+    /// of 0 counts as 1 mm.
+    pub fn risk(e: &Edge, influence_mm: u16) -> u64 {
+        let c = e.clearance_mm.max(1) as u64;
+        let rho = influence_mm as u64;
+        if c >= rho {
+            return 0;
+        }
+        // (ρ₀ − c)/c in Q8: below 2^24 (ρ₀ < 2^16), squared below 2^48,
+        // times a u16 length below 2^64.
+        let q = ((rho - c) << 8) / c;
+        (e.length_mm as u64 * q * q) >> 16
+    }
+
+    /// Dijkstra from `from` to `to` over the unblocked edges, each edge's
+    /// length doubled once for every time it is in `penalised` (earlier
+    /// candidates). `None` if `to` cannot be reached.
+    fn shortest(&self, from: u16, to: u16, penalised: &[&Route<N>]) -> Option<Route<N>> {
+        let n = self.nodes.len();
+        if from as usize >= n || to as usize >= n {
+            return None;
+        }
+        // How often each edge is on an earlier candidate, once.
+        let mut times = [0u8; E];
+        for r in penalised {
+            for w in r.nodes.windows(2) {
+                for (t, e) in times.iter_mut().zip(self.edges.iter()) {
+                    if same_edge(w, e) {
+                        *t = t.saturating_add(1);
+                    }
+                }
+            }
+        }
+        let mut dist = [u32::MAX; N];
+        let mut prev = [NONE; N];
+        let mut done = [false; N];
+        dist[from as usize] = 0;
+        loop {
+            // The nearest node not yet done (O(N): the maps are small).
+            let mut u = NONE;
+            let mut best = u32::MAX;
+            for (i, (&d, &f)) in dist.iter().zip(done.iter()).take(n).enumerate() {
+                if !f && d < best {
+                    best = d;
+                    u = i as u16;
+                }
+            }
+            if u == NONE || u == to {
+                break;
+            }
+            done[u as usize] = true;
+            for (e, &t) in self.edges.iter().zip(times.iter()) {
+                let v = match (e.a == u, e.b == u) {
+                    _ if e.blocked => continue,
+                    (true, _) => e.b,
+                    (_, true) => e.a,
+                    _ => continue,
+                };
+                let w = (e.length_mm as u32) << t.min(8);
+                let alt = best.saturating_add(w);
+                if alt < dist[v as usize] {
+                    dist[v as usize] = alt;
+                    prev[v as usize] = u;
+                }
+            }
+        }
+        if dist[to as usize] == u32::MAX {
+            return None;
+        }
+        // Walk back from `to`, then reverse.
+        let mut nodes: heapless::Vec<u16, N> = heapless::Vec::new();
+        let mut at = to;
+        while at != NONE {
+            nodes.push(at).ok()?;
+            at = prev[at as usize];
+        }
+        nodes.reverse();
+        Some(self.measured(nodes))
+    }
+
+    /// A route through `nodes` with its true length (its risk is scored
+    /// by [`RouteMap::plan`]).
+    fn measured(&self, nodes: heapless::Vec<u16, N>) -> Route<N> {
+        let mut route = Route {
+            nodes,
+            length_mm: 0,
+            risk: 0,
+        };
+        for w in route.nodes.windows(2) {
+            if let Some(e) = self.edge_between(w[0], w[1]) {
+                route.length_mm += e.length_mm as u32;
+            }
+        }
+        route
+    }
+
+    /// The shortest unblocked edge between `a` and `b`.
+    fn edge_between(&self, a: u16, b: u16) -> Option<&Edge> {
+        self.edges
+            .iter()
+            .filter(|e| !e.blocked && same_edge(&[a, b], e))
+            .min_by_key(|e| e.length_mm)
+    }
+
+    /// The route from `from` to `to` (node indices): of Dijkstra's
+    /// candidates within the length slack, the one of least risk (module
+    /// docs). `None` if no unblocked route joins them.
+    pub fn plan(&self, from: u16, to: u16, cfg: &RouteConfig) -> Option<Route<N>> {
+        let mut best = self.shortest(from, to, &[])?;
+        best.risk = self.route_risk(&best, cfg.influence_mm);
+        let limit = best.length_mm as u64 * (100 + cfg.slack_pct as u64) / 100;
+        let mut found = [None, None, None, None, None, None, None, None];
+        let k = (cfg.candidates as usize).clamp(1, found.len());
+        found[0] = Some(best.clone());
+        for i in 1..k {
+            let mut c = {
+                let earlier: heapless::Vec<&Route<N>, 8> = found.iter().flatten().collect();
+                match self.shortest(from, to, &earlier) {
+                    // The same again: no other route is left to offer.
+                    Some(c) if !earlier.iter().any(|r| r.nodes == c.nodes) => c,
+                    _ => break,
+                }
+            };
+            c.risk = self.route_risk(&c, cfg.influence_mm);
+            if c.length_mm as u64 <= limit && (c.risk, c.length_mm) < (best.risk, best.length_mm) {
+                best = c.clone();
+            }
+            found[i] = Some(c);
+        }
+        Some(best)
+    }
+
+    /// The summed risk of `r`'s edges.
+    fn route_risk(&self, r: &Route<N>, influence_mm: u16) -> u64 {
+        r.nodes
+            .windows(2)
+            .filter_map(|w| self.edge_between(w[0], w[1]))
+            .map(|e| Self::risk(e, influence_mm))
+            .fold(0u64, u64::saturating_add)
+    }
+}
+
+fn same_edge(w: &[u16], e: &Edge) -> bool {
+    (w[0], w[1]) == (e.a, e.b) || (w[0], w[1]) == (e.b, e.a)
+}
+
+/// The EAPF planner driven along a route of a known map (module docs).
+pub struct RoutePlanner<const N: usize, const E: usize> {
+    planner: Planner,
+    map: RouteMap<N, E>,
+    cfg: RouteConfig,
+    goal: Point,
+    /// The route's nodes; `next` indexes the waypoint being driven to
+    /// (`route.len()`: the goal itself).
+    route: heapless::Vec<u16, N>,
+    next: usize,
+    planned: bool,
+    unreachable: bool,
+}
+
+impl<const N: usize, const E: usize> RoutePlanner<N, E> {
+    /// Drive to `goal` over `map` (planned at the first step, from the node
+    /// nearest the rover to the node nearest the goal).
+    pub fn new(config: Config, map: RouteMap<N, E>, cfg: RouteConfig, goal: Point) -> Self {
+        RoutePlanner {
+            planner: Planner::new(config, goal),
+            map,
+            cfg,
+            goal,
+            route: heapless::Vec::new(),
+            next: 0,
+            planned: false,
+            unreachable: false,
+        }
+    }
+
+    /// The EAPF planner underneath (its goal is the current waypoint).
+    pub fn planner(&self) -> &Planner {
+        &self.planner
+    }
+
+    /// The map (with the legs found blocked).
+    pub fn map(&self) -> &RouteMap<N, E> {
+        &self.map
+    }
+
+    /// The waypoints still to come, then the goal.
+    pub fn waypoints(&self) -> impl Iterator<Item = Point> + '_ {
+        let nodes = self.map.nodes();
+        self.route
+            .iter()
+            .skip(self.next)
+            .filter_map(|&i| nodes.get(i as usize).copied())
+            .chain(core::iter::once(self.goal))
+    }
+
+    /// The whole route being followed (the waypoints passed included),
+    /// then the goal.
+    pub fn route(&self) -> impl Iterator<Item = Point> + '_ {
+        let nodes = self.map.nodes();
+        self.route
+            .iter()
+            .filter_map(|&i| nodes.get(i as usize).copied())
+            .chain(core::iter::once(self.goal))
+    }
+
+    /// Plan from the node nearest `at`; without a route, head for the goal
+    /// directly (module docs).
+    fn replan(&mut self, at: Point) {
+        let route = match (self.map.nearest_node(at), self.map.nearest_node(self.goal)) {
+            (Some(from), Some(to)) => self.map.plan(from, to, &self.cfg),
+            _ => None,
+        };
+        self.route = route.map(|r| r.nodes).unwrap_or_default();
+        self.next = 0;
+        self.planned = true;
+    }
+
+    /// The point being driven to: the next waypoint, or the goal.
+    fn target(&self) -> Point {
+        self.route
+            .get(self.next)
+            .and_then(|&i| self.map.nodes().get(i as usize).copied())
+            .unwrap_or(self.goal)
+    }
+
+    /// One cycle, as [`Planner::step_raw`]: waypoints within `pass_mm` are
+    /// passed; a waypoint reached is passed; a leg the planner gives up on
+    /// is blocked and the route planned again from here.
+    pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        if self.unreachable {
+            return Output::stop(pose.heading, Status::Unreachable);
+        }
+        if !self.planned {
+            self.replan(pose.position);
+        }
+        // At most one pass and one replan per node of the route each
+        // cycle: the loop ends.
+        for _ in 0..=2 * N + 2 {
+            let target = self.target();
+            let is_goal = self.next >= self.route.len();
+            if self.planner.goal() != target {
+                self.planner.set_goal(target);
+            }
+            if !is_goal {
+                let (dx, dy) = pose.position.to(target);
+                if hypot(dx, dy) <= self.cfg.pass_mm {
+                    self.next += 1;
+                    continue;
+                }
+            }
+            let out = self.planner.step_raw(pose, raw);
+            match out.status {
+                Status::Arrived if !is_goal => self.next += 1,
+                Status::Unreachable if !is_goal => {
+                    // Block the leg from the last waypoint to this one (to
+                    // the first: from the node nearest the rover) and plan
+                    // again.
+                    let to = self.route[self.next];
+                    let from = match self.next.checked_sub(1) {
+                        Some(i) => Some(self.route[i]),
+                        None => self.map.nearest_node(pose.position),
+                    };
+                    match from {
+                        Some(from) if from != to => self.map.block(from, to),
+                        // A waypoint the rover stands at yet cannot reach:
+                        // no leg to block; drive to the goal directly.
+                        _ => self.route.clear(),
+                    }
+                    if !self.route.is_empty() {
+                        self.replan(pose.position);
+                    }
+                    // A fresh start for the planner (its give-up cleared),
+                    // even towards the same point.
+                    self.planner.set_goal(self.target());
+                }
+                Status::Unreachable => {
+                    self.unreachable = true;
+                    return out;
+                }
+                _ => return out,
+            }
+        }
+        self.unreachable = true;
+        Output::stop(pose.heading, Status::Unreachable)
+    }
+
+    /// The guard during an advance, as [`Planner::guard_raw`].
+    pub fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        self.planner.guard_raw(raw, remaining_mm)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A ladder: two rails of `n` nodes 500 mm apart, rungs between them;
+    /// the lower rail runs 50 mm from obstacles, the upper 400 mm.
+    fn ladder(n: u16) -> RouteMap<32, 96> {
+        let mut m = RouteMap::new();
+        for i in 0..n {
+            m.add_node(Point::new(i as i16 * 500, 0)).unwrap();
+            m.add_node(Point::new(i as i16 * 500, 500)).unwrap();
+        }
+        for i in 0..n {
+            let (lo, hi) = (2 * i, 2 * i + 1);
+            m.add_edge(lo, hi, 200).unwrap();
+            if i + 1 < n {
+                m.add_edge(lo, lo + 2, 50).unwrap();
+                m.add_edge(hi, hi + 2, 400).unwrap();
+            }
+        }
+        m
+    }
+
+    #[test]
+    fn dijkstra_finds_the_shortest_route() {
+        let m = ladder(5);
+        let r = m.shortest(0, 8, &[]).unwrap();
+        assert_eq!(r.nodes.as_slice(), &[0, 2, 4, 6, 8]);
+        assert_eq!(r.length_mm, 2_000);
+        // Blocked rails are gone around.
+        let mut m = m;
+        m.block(4, 2);
+        let r = m.shortest(0, 8, &[]).unwrap();
+        assert_eq!(r.length_mm, 3_000, "{:?}", r.nodes);
+        assert!(!r.nodes.windows(2).any(|w| same_edge(w, &m.edges()[3])));
+    }
+
+    #[test]
+    fn risk_is_the_repulsive_potential_along_the_edge() {
+        let e = |clearance_mm| Edge {
+            a: 0,
+            b: 1,
+            clearance_mm,
+            length_mm: 1_000,
+            blocked: false,
+        };
+        let risk = |c| RouteMap::<2, 1>::risk(&e(c), 300);
+        assert_eq!(risk(300), 0);
+        assert_eq!(risk(1_000), 0);
+        // ((300 − 100)/100)² = 4 per mm of length.
+        assert_eq!(risk(100), 4_000);
+        // ((300 − 150)/150)² = 1.
+        assert_eq!(risk(150), 1_000);
+        assert!(risk(50) > risk(100) && risk(0) > risk(50));
+    }
+
+    #[test]
+    fn the_safer_route_is_taken_within_the_slack() {
+        // The lower rail is shortest (2,000 mm) but runs 50 mm from
+        // obstacles (risk 2,000 · 25); the upper one (two rungs more:
+        // 3,000 mm, 1.5×) runs 400 mm from them.
+        let m = ladder(5);
+        let tight = RouteConfig {
+            slack_pct: 25,
+            ..RouteConfig::default()
+        };
+        let r = m.plan(0, 8, &tight).unwrap();
+        assert_eq!(r.length_mm, 2_000, "25 % allows no detour of 50 %");
+        let loose = RouteConfig {
+            slack_pct: 60,
+            ..RouteConfig::default()
+        };
+        let r = m.plan(0, 8, &loose).unwrap();
+        assert_eq!(r.nodes.as_slice(), &[0, 1, 3, 5, 7, 9, 8]);
+        // Only its two rungs (200 mm clear) carry risk: 2 · 500 · 0.25.
+        assert_eq!((r.length_mm, r.risk), (3_000, 250));
+        // One candidate: the shortest, whatever its risk.
+        let one = RouteConfig {
+            candidates: 1,
+            ..loose
+        };
+        assert_eq!(m.plan(0, 8, &one).unwrap().length_mm, 2_000);
+    }
+
+    /// The start, the goal 3 m north, and a waypoint 1.5 m east of their
+    /// middle: straight on is shorter but 20 mm from obstacles.
+    fn detour() -> RouteMap<4, 4> {
+        let mut m = RouteMap::new();
+        let s = m.add_node(Point::new(0, 0)).unwrap();
+        let w = m.add_node(Point::new(1_500, 1_500)).unwrap();
+        let g = m.add_node(Point::new(0, 3_000)).unwrap();
+        m.add_edge(s, w, 500).unwrap();
+        m.add_edge(w, g, 500).unwrap();
+        m.add_edge(s, g, 20).unwrap();
+        m
+    }
+
+    fn planner(cfg: RouteConfig) -> RoutePlanner<4, 4> {
+        let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
+            .build()
+            .unwrap();
+        RoutePlanner::new(config, detour(), cfg, Point::new(0, 3_000))
+    }
+
+    /// Nothing in sight: each sensor at its phantom level (0.28 V).
+    const CLEAR: RawCounts = [57; 5];
+
+    #[test]
+    fn the_rover_follows_the_route_through_its_waypoint() {
+        let mut p = planner(RouteConfig {
+            slack_pct: 50,
+            ..RouteConfig::default()
+        });
+        let mut pose = Pose::default();
+        let mut nearest_waypoint = u16::MAX;
+        for _ in 0..60 {
+            let out = p.step_raw(pose, &CLEAR);
+            if out.status == Status::Arrived {
+                assert!(
+                    nearest_waypoint <= 250,
+                    "passed within {nearest_waypoint} mm"
+                );
+                assert_eq!(p.waypoints().count(), 1, "only the goal left");
+                return;
+            }
+            assert_eq!(out.status, Status::Moving);
+            // A perfect rover: turn, then the whole step.
+            pose.heading = out.command.heading;
+            let d = crate::fixed::Dir::of(pose.heading);
+            pose.position = pose.position.offset_dir(d, out.command.step_mm);
+            let (dx, dy) = pose.position.to(Point::new(1_500, 1_500));
+            nearest_waypoint = nearest_waypoint.min(hypot(dx, dy));
+        }
+        panic!("not arrived: at {:?}", pose.position);
+    }
+
+    #[test]
+    fn a_leg_the_planner_gives_up_on_is_blocked_and_another_route_taken() {
+        let mut p = planner(RouteConfig {
+            slack_pct: 50,
+            ..RouteConfig::default()
+        });
+        // A wall right in front whatever the heading, and a rover that
+        // never moves: the planner's escape gives up on each way in turn.
+        let near = p.planner().config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let wall = [near; 5];
+        let pose = Pose::default();
+        let first: heapless::Vec<Point, 4> = {
+            let _ = p.step_raw(pose, &wall);
+            p.waypoints().collect()
+        };
+        assert_eq!(first.len(), 3, "start, waypoint, goal: {first:?}");
+        let mut switched = false;
+        for _ in 0..5_000 {
+            let out = p.step_raw(pose, &wall);
+            let now: heapless::Vec<Point, 4> = p.waypoints().collect();
+            switched |= now != first;
+            if out.status == Status::Unreachable {
+                assert!(switched, "the route changed before giving up");
+                assert!(p.map().edges().iter().any(|e| e.blocked));
+                // And it stays given up.
+                assert_eq!(p.step_raw(pose, &CLEAR).status, Status::Unreachable);
+                return;
+            }
+            assert_eq!(out.command.step_mm, 0, "never into the wall");
+        }
+        panic!("never gave up");
+    }
+
+    #[test]
+    fn bad_maps_are_refused_and_unjoined_nodes_have_no_route() {
+        let mut m: RouteMap<2, 1> = RouteMap::new();
+        let a = m.add_node(Point::new(0, 0)).unwrap();
+        let b = m.add_node(Point::new(100, 0)).unwrap();
+        assert_eq!(m.add_node(Point::new(1, 1)), Err(MapError::Full));
+        assert_eq!(m.add_edge(a, 7, 100), Err(MapError::BadEdge));
+        assert_eq!(m.add_edge(a, a, 100), Err(MapError::BadEdge));
+        assert_eq!(m.plan(a, b, &RouteConfig::default()), None);
+        m.add_edge(a, b, 100).unwrap();
+        assert_eq!(m.add_edge(b, a, 100), Err(MapError::Full));
+        assert_eq!(
+            m.plan(a, b, &RouteConfig::default()).unwrap().length_mm,
+            100
+        );
+        assert_eq!(m.plan(a, 9, &RouteConfig::default()), None);
+        assert_eq!(m.nearest_node(Point::new(90, 50)), Some(b));
+    }
+}
