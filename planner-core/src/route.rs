@@ -92,6 +92,9 @@ pub struct RouteConfig {
     pub candidates: u8,
     /// A waypoint is passed once the rover is this near it, mm.
     pub pass_mm: u16,
+    /// Routes keep to edges at least this clear of obstacles, mm, while
+    /// one exists; only then are narrower edges used (0: any edge).
+    pub preferred_clearance_mm: u16,
 }
 
 impl Default for RouteConfig {
@@ -104,6 +107,7 @@ impl Default for RouteConfig {
             slack_pct: 25,
             candidates: 4,
             pass_mm: 250,
+            preferred_clearance_mm: 0,
         }
     }
 }
@@ -213,7 +217,13 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
     /// Dijkstra from `from` to `to` over the unblocked edges, each edge's
     /// length doubled once for every time it is in `penalised` (earlier
     /// candidates). `None` if `to` cannot be reached.
-    fn shortest(&self, from: u16, to: u16, penalised: &[&Route<N>]) -> Option<Route<N>> {
+    fn shortest(
+        &self,
+        from: u16,
+        to: u16,
+        min_clearance_mm: u16,
+        penalised: &[&Route<N>],
+    ) -> Option<Route<N>> {
         let n = self.nodes.len();
         if from as usize >= n || to as usize >= n {
             return None;
@@ -249,7 +259,7 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
             done[u as usize] = true;
             for (e, &t) in self.edges.iter().zip(times.iter()) {
                 let v = match (e.a == u, e.b == u) {
-                    _ if e.blocked => continue,
+                    _ if e.blocked || e.clearance_mm < min_clearance_mm => continue,
                     (true, _) => e.b,
                     (_, true) => e.a,
                     _ => continue,
@@ -302,9 +312,22 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
 
     /// The route from `from` to `to` (node indices): of Dijkstra's
     /// candidates within the length slack, the one of least risk (module
-    /// docs). `None` if no unblocked route joins them.
+    /// docs), over the edges of the preferred clearance if they join them.
+    /// `None` if no unblocked route does.
     pub fn plan(&self, from: u16, to: u16, cfg: &RouteConfig) -> Option<Route<N>> {
-        let mut best = self.shortest(from, to, &[])?;
+        self.plan_over(from, to, cfg, cfg.preferred_clearance_mm)
+            .or_else(|| self.plan_over(from, to, cfg, 0))
+    }
+
+    /// [`RouteMap::plan`] over the edges at least `min_clearance_mm` clear.
+    fn plan_over(
+        &self,
+        from: u16,
+        to: u16,
+        cfg: &RouteConfig,
+        min_clearance_mm: u16,
+    ) -> Option<Route<N>> {
+        let mut best = self.shortest(from, to, min_clearance_mm, &[])?;
         best.risk = self.route_risk(&best, cfg.influence_mm);
         let limit = best.length_mm as u64 * (100 + cfg.slack_pct as u64) / 100;
         let mut found = [None, None, None, None, None, None, None, None];
@@ -313,7 +336,7 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
         for i in 1..k {
             let mut c = {
                 let earlier: heapless::Vec<&Route<N>, 8> = found.iter().flatten().collect();
-                match self.shortest(from, to, &earlier) {
+                match self.shortest(from, to, min_clearance_mm, &earlier) {
                     // The same again: no other route is left to offer.
                     Some(c) if !earlier.iter().any(|r| r.nodes == c.nodes) => c,
                     _ => break,
@@ -515,13 +538,13 @@ mod tests {
     #[test]
     fn dijkstra_finds_the_shortest_route() {
         let m = ladder(5);
-        let r = m.shortest(0, 8, &[]).unwrap();
+        let r = m.shortest(0, 8, 0, &[]).unwrap();
         assert_eq!(r.nodes.as_slice(), &[0, 2, 4, 6, 8]);
         assert_eq!(r.length_mm, 2_000);
         // Blocked rails are gone around.
         let mut m = m;
         m.block(4, 2);
-        let r = m.shortest(0, 8, &[]).unwrap();
+        let r = m.shortest(0, 8, 0, &[]).unwrap();
         assert_eq!(r.length_mm, 3_000, "{:?}", r.nodes);
         assert!(!r.nodes.windows(2).any(|w| same_edge(w, &m.edges()[3])));
     }
@@ -656,6 +679,20 @@ mod tests {
             assert_eq!(out.command.step_mm, 0, "never into the wall");
         }
         panic!("never gave up");
+    }
+
+    #[test]
+    fn the_preferred_clearance_is_kept_while_a_route_keeps_it() {
+        // The upper rail and the rungs are 200 mm clear or more, the
+        // lower rail 50 mm: preferring 150 mm takes the upper way whatever
+        // the slack; preferring more than any edge has falls back to all.
+        let m = ladder(5);
+        let prefer = |mm| RouteConfig {
+            preferred_clearance_mm: mm,
+            ..RouteConfig::default()
+        };
+        assert_eq!(m.plan(0, 8, &prefer(150)).unwrap().length_mm, 3_000);
+        assert_eq!(m.plan(0, 8, &prefer(1_000)).unwrap().length_mm, 2_000);
     }
 
     #[test]

@@ -124,12 +124,15 @@ impl SimPlanner {
             PlannerKind::Apf => {
                 Core::Apf(Box::new(ApfPlanner::new(cfg, ApfConfig::default(), goal)))
             }
-            PlannerKind::Route => Core::Route(Box::new(RoutePlanner::new(
-                cfg,
-                routemap::build(sc),
-                RouteConfig::default(),
-                goal,
-            ))),
+            PlannerKind::Route => {
+                let keep_m = sc.robot_radius + routemap::PREFERRED_MARGIN_M;
+                let route = RouteConfig {
+                    preferred_clearance_mm: (keep_m * 1000.0).round() as u16,
+                    ..RouteConfig::default()
+                };
+                let map = routemap::build(sc);
+                Core::Route(Box::new(RoutePlanner::new(cfg, map, route, goal)))
+            }
             _ => Core::Eapf(Box::new(Planner::new(cfg, goal))),
         };
         SimPlanner { core }

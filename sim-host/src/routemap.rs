@@ -3,8 +3,8 @@
 //! known map, because the world's geometry lives here; the planning and the
 //! following are the core's.
 //!
-//! Nodes on a square grid wherever the rover's disc plus a margin
-//! (`MARGIN_M`, 80 mm) fits (0.2 m apart, wider for large worlds so that the graph
+//! Nodes on a square grid wherever the rover's disc plus the planner's
+//! clearance (40 mm) fits (0.2 m apart, wider for large worlds so that the graph
 //! stays within [`ROUTE_NODES`]), edges to the eight neighbours where the
 //! swept disc fits all the way, and the start and the goal joined to the
 //! grid nodes they see within 2.5 cells. Each edge carries its clearance:
@@ -27,11 +27,16 @@ pub type SimRouteMap = RouteMap<ROUTE_NODES, ROUTE_EDGES>;
 /// The grid's spacing in small worlds, m.
 pub const GRID_M: f64 = 0.2;
 
-/// Beyond the disc, what a node or an edge must keep clear, m: twice the
-/// planner's default clearance. At 40 mm a route in barn-193 (seed 1) led
+/// Beyond the disc, what a node or an edge must keep clear, m: the
+/// planner's default clearance.
+const MARGIN_M: f64 = 0.04;
+
+/// Beyond the disc, what the edges of a route keep clear while such a
+/// route exists, m (`RouteConfig::preferred_clearance_mm`): twice the
+/// planner's clearance. With routes at 40 mm, one in barn-193 (seed 1) led
 /// the rover to turn beside a 10 cm block none of its beams had seen, then
 /// into it (docs/bench.md, "The route layer").
-const MARGIN_M: f64 = 0.08;
+pub const PREFERRED_MARGIN_M: f64 = 0.08;
 
 fn mm(p: V2) -> Point {
     crate::planners::to_point(p)

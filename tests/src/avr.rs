@@ -249,6 +249,25 @@ pub struct LoopRun {
     pub after_stop: Option<(u32, f64)>,
 }
 
+/// Run the firmware for one millisecond, sampling its PWM pins every 16 µs:
+/// the wheel speeds the pins ask for (m/s, signed by the direction pins at
+/// the end) and the PWM samples that were high, both wheels.
+fn wheels_for_1ms(a: &mut Avr) -> (f64, f64, u32) {
+    const SAMPLES: u32 = 62;
+    let (mut high_l, mut high_r) = (0u32, 0u32);
+    for _ in 0..SAMPLES {
+        a.avr.run_for(256u64);
+        let mut pins = a.avr.pins();
+        high_l += pins.pd6().is_high() as u32;
+        high_r += pins.pd5().is_high() as u32;
+    }
+    let mut pins = a.avr.pins();
+    let dir_l = pins.pd7().is_high() as i32 - pins.pb0().is_high() as i32;
+    let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
+    let speed = |dir: i32, high: u32| dir as f64 * high as f64 / SAMPLES as f64 * WHEEL_SPEED_MPS;
+    (speed(dir_l, high_l), speed(dir_r, high_r), high_l + high_r)
+}
+
 /// Drive a scenario closed-loop: the emulated firmware reads the five ADC
 /// pins (driven with sim-host's realistic sensor voltages for the true
 /// pose), drives its PWM and direction pins, and counts encoder edges
@@ -329,21 +348,8 @@ pub fn drive_with(
                 _ => pins.adc4().set_mv(mv),
             }
         }
-        // One millisecond, sampling the PWM pins every 16 µs.
-        let (mut high_l, mut high_r, mut n) = (0u32, 0u32, 0u32);
-        for _ in 0..62 {
-            a.avr.run_for(256u64);
-            let mut pins = a.avr.pins();
-            high_l += pins.pd6().is_high() as u32;
-            high_r += pins.pd5().is_high() as u32;
-            n += 1;
-        }
+        let (vl, vr, _) = wheels_for_1ms(&mut a);
         a.run_us(8); // collect serial output
-        let mut pins = a.avr.pins();
-        let dir_l = pins.pd7().is_high() as i32 - pins.pb0().is_high() as i32;
-        let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
-        let vl = dir_l as f64 * high_l as f64 / n as f64 * WHEEL_SPEED_MPS;
-        let vr = dir_r as f64 * high_r as f64 / n as f64 * WHEEL_SPEED_MPS;
         let (q, h1) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
         if world.static_sweep_clearance(p, q) <= sc.robot_radius {
             break LoopOutcome::Collision;
@@ -395,21 +401,10 @@ pub fn drive_with(
         let stopped_at = p;
         let mut high = 0;
         for ms in 0..102 {
-            let (mut high_l, mut high_r) = (0u32, 0u32);
-            for _ in 0..62 {
-                a.avr.run_for(256u64);
-                let mut pins = a.avr.pins();
-                high_l += pins.pd6().is_high() as u32;
-                high_r += pins.pd5().is_high() as u32;
-            }
-            let mut pins = a.avr.pins();
-            let dir_l = pins.pd7().is_high() as i32 - pins.pb0().is_high() as i32;
-            let dir_r = pins.pb1().is_high() as i32 - pins.pb2().is_high() as i32;
-            let vl = dir_l as f64 * high_l as f64 / 62.0 * WHEEL_SPEED_MPS;
-            let vr = dir_r as f64 * high_r as f64 / 62.0 * WHEEL_SPEED_MPS;
+            let (vl, vr, pulses) = wheels_for_1ms(&mut a);
             (p, h) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
             if ms >= 2 {
-                high += high_l + high_r;
+                high += pulses;
             }
         }
         (high, p.dist(stopped_at))
