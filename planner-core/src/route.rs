@@ -95,6 +95,12 @@ pub struct RouteConfig {
     /// Routes keep to edges at least this clear of obstacles, mm, while
     /// one exists; only then are narrower edges used (0: any edge).
     pub preferred_clearance_mm: u16,
+    /// Planner cycles a leg may take before it is given up (blocked) like
+    /// one the planner gives up on: a leg is a few hundred mm, and one the
+    /// rover cannot pass (a gap the graph fits but the planner's safety
+    /// corridor barely does) would otherwise hold it for the planner's
+    /// whole give-up budget.
+    pub leg_cycles: u16,
 }
 
 impl Default for RouteConfig {
@@ -108,6 +114,7 @@ impl Default for RouteConfig {
             candidates: 4,
             pass_mm: 250,
             preferred_clearance_mm: 0,
+            leg_cycles: 100,
         }
     }
 }
@@ -377,6 +384,8 @@ pub struct RoutePlanner<const N: usize, const E: usize> {
     next: usize,
     planned: bool,
     unreachable: bool,
+    /// Cycles spent on the current leg.
+    on_leg: u16,
 }
 
 impl<const N: usize, const E: usize> RoutePlanner<N, E> {
@@ -392,6 +401,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
             next: 0,
             planned: false,
             unreachable: false,
+            on_leg: 0,
         }
     }
 
@@ -446,8 +456,9 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
     }
 
     /// One cycle, as [`Planner::step_raw`]: waypoints within `pass_mm` are
-    /// passed; a waypoint reached is passed; a leg the planner gives up on
-    /// is blocked and the route planned again from here.
+    /// passed; a waypoint reached is passed; a leg the planner gives up on,
+    /// or that takes more than `leg_cycles`, is blocked and the route
+    /// planned again from here.
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
         if self.unreachable {
             return Output::stop(pose.heading, Status::Unreachable);
@@ -462,6 +473,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
             let is_goal = self.next >= self.route.len();
             if self.planner.goal() != target {
                 self.planner.set_goal(target);
+                self.on_leg = 0;
             }
             if !is_goal {
                 let (dx, dy) = pose.position.to(target);
@@ -471,9 +483,16 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
                 }
             }
             let out = self.planner.step_raw(pose, raw);
+            self.on_leg = self.on_leg.saturating_add(1);
+            // A leg given up: by the planner, or for taking too long.
+            let given_up = match out.status {
+                Status::Unreachable => true,
+                Status::Moving => self.on_leg > self.cfg.leg_cycles,
+                _ => false,
+            };
             match out.status {
                 Status::Arrived if !is_goal => self.next += 1,
-                Status::Unreachable if !is_goal => {
+                _ if given_up && !is_goal => {
                     // Block the leg from the last waypoint to this one (to
                     // the first: from the node nearest the rover) and plan
                     // again.
@@ -494,6 +513,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
                     // A fresh start for the planner (its give-up cleared),
                     // even towards the same point.
                     self.planner.set_goal(self.target());
+                    self.on_leg = 0;
                 }
                 Status::Unreachable => {
                     self.unreachable = true;
@@ -664,13 +684,18 @@ mod tests {
             p.waypoints().collect()
         };
         assert_eq!(first.len(), 3, "start, waypoint, goal: {first:?}");
-        let mut switched = false;
-        for _ in 0..5_000 {
+        let mut switched = None;
+        for cycle in 0..5_000 {
             let out = p.step_raw(pose, &wall);
             let now: heapless::Vec<Point, 4> = p.waypoints().collect();
-            switched |= now != first;
+            if now != first && switched.is_none() {
+                // Within the leg's budget (100 cycles), not the planner's
+                // give-up (400).
+                assert!(cycle <= 101, "switched after {cycle} cycles");
+                switched = Some(cycle);
+            }
             if out.status == Status::Unreachable {
-                assert!(switched, "the route changed before giving up");
+                assert!(switched.is_some(), "the route changed before giving up");
                 assert!(p.map().edges().iter().any(|e| e.blocked));
                 // And it stays given up.
                 assert_eq!(p.step_raw(pose, &CLEAR).status, Status::Unreachable);
