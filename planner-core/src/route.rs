@@ -3,14 +3,16 @@
 //! graph, the potential field scores each candidate's safety and the safest
 //! is taken; the online EAPF planner then drives from waypoint to waypoint
 //! with its sensors, and a leg it cannot drive (its planner says
-//! unreachable) is blocked and the route planned again from where the
-//! rover stands: the paper's switch to another path when one is blocked.
+//! unreachable, or the leg takes too long) is blocked and the route planned
+//! again from where the rover stands: the paper's switch to another path
+//! when one is blocked.
 //!
 //! Allocation-free: the map's capacity is in its type (`N` nodes, `E`
 //! edges; a few dozen fit an MCU's flash, the simulator uses hundreds), and
-//! a search keeps its work on the stack (7 bytes a node, 1 an edge). A
-//! search is `O(N·E)`: fine for the maps it is meant for, and run only at
-//! the start and when a leg is blocked.
+//! a search keeps its work on the stack (7 bytes a node, 1 an edge; a
+//! plan also its candidates, 2 bytes a node each). A search is `O(N·E)`:
+//! fine for the maps it is meant for, and run only at the start and when a
+//! leg is blocked.
 //!
 //! Ours, where the paper's page is silent:
 //! - A map gives each edge its clearance: the least distance from the
@@ -106,7 +108,8 @@ pub struct RouteConfig {
 impl Default for RouteConfig {
     /// ρ₀ = 300 mm (the classical APF baseline's ρ, `apf`), 25 % slack
     /// (the product's path-length aim), four candidates, waypoints passed
-    /// within 250 mm (a step or so: the planner does not stop at each).
+    /// within 250 mm (a step or so: the planner does not stop at each),
+    /// any edge clearance, 100 cycles a leg.
     fn default() -> Self {
         RouteConfig {
             influence_mm: 300,
@@ -417,12 +420,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
 
     /// The waypoints still to come, then the goal.
     pub fn waypoints(&self) -> impl Iterator<Item = Point> + '_ {
-        let nodes = self.map.nodes();
-        self.route
-            .iter()
-            .skip(self.next)
-            .filter_map(|&i| nodes.get(i as usize).copied())
-            .chain(core::iter::once(self.goal))
+        self.route().skip(self.next)
     }
 
     /// The whole route being followed (the waypoints passed included),
@@ -496,13 +494,13 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
                     // Block the leg from the last waypoint to this one (to
                     // the first: from the node nearest the rover) and plan
                     // again.
-                    let to = self.route[self.next];
+                    let to = self.route.get(self.next).copied();
                     let from = match self.next.checked_sub(1) {
-                        Some(i) => Some(self.route[i]),
+                        Some(i) => self.route.get(i).copied(),
                         None => self.map.nearest_node(pose.position),
                     };
-                    match from {
-                        Some(from) if from != to => self.map.block(from, to),
+                    match (from, to) {
+                        (Some(from), Some(to)) if from != to => self.map.block(from, to),
                         // A waypoint the rover stands at yet cannot reach:
                         // no leg to block; drive to the goal directly.
                         _ => self.route.clear(),
