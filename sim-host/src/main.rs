@@ -155,6 +155,16 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 "min_clear    {:.3} m\nvirtual_obs  {}\n",
                 res.min_clearance, res.virtual_dropped
             );
+            // Planner `route`: the route at the end (waypoints, then the
+            // goal), or none on the graph.
+            match res.route.len() {
+                0 => {}
+                1 => report += "route        none on the graph: for the goal directly\n",
+                n => {
+                    let length: f64 = res.route.windows(2).map(|w| w[0].dist(w[1])).sum();
+                    report += &format!("route        {} waypoints, {length:.3} m\n", n - 1);
+                }
+            }
             if let Some(out) = svg_out {
                 let pic = svg::render(
                     &sc,

@@ -70,3 +70,27 @@ fn a_reader_that_leaves_early_is_no_panic() {
     assert!(out.status.success(), "{err}");
     assert!(!err.contains("panicked"), "{err}");
 }
+
+#[test]
+fn run_with_the_route_layer_reports_its_route_and_draws_it() {
+    let dir = std::env::temp_dir().join(format!("sim-host-route-{}", std::process::id()));
+    let svg = dir.join("corridor.svg");
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["run", "--planner", "route", "--svg"])
+        .arg(&svg)
+        .arg(corridor())
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8(out.stdout).unwrap();
+    assert!(text.contains("outcome      reached"), "{text}");
+    let route = text.lines().find(|l| l.starts_with("route ")).unwrap_or("");
+    assert!(route.contains(" waypoints, "), "{text}");
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert!(pic.contains(">route</text>"), "the legend names the route");
+    std::fs::remove_dir_all(&dir).ok();
+}
