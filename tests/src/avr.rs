@@ -252,7 +252,7 @@ pub struct LoopRun {
 /// Run the firmware for one millisecond, sampling its PWM pins every 16 µs:
 /// the wheel speeds the pins ask for (m/s, signed by the direction pins at
 /// the end) and the PWM samples that were high, both wheels.
-fn wheels_for_1ms(a: &mut Avr) -> (f64, f64, u32) {
+pub fn wheels_for_1ms(a: &mut Avr) -> (f64, f64, u32) {
     const SAMPLES: u32 = 62;
     let (mut high_l, mut high_r) = (0u32, 0u32);
     for _ in 0..SAMPLES {

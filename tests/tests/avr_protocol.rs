@@ -1,0 +1,68 @@
+//! The ATmega328P firmware's serial protocol (`planner_core::protocol`) as
+//! a user meets it in simavr: bad lines get `ERR`, never a reset; a goal
+//! starts the drive and its telemetry; the pose cannot be set while
+//! driving; `S` stops the motors.
+
+use rover_tests::avr::{wheels_for_1ms, Avr};
+
+/// The reply to `line`, past the telemetry lines (`T …`) of a drive.
+fn reply(a: &mut Avr, line: &str) -> Option<String> {
+    a.send(format!("{line}\n").as_bytes());
+    loop {
+        let l = a.read_line(100)?;
+        if !l.starts_with("T ") {
+            return Some(l);
+        }
+    }
+}
+
+#[test]
+fn the_serial_protocol_as_a_user_meets_it() {
+    let mut a = Avr::boot();
+    let overlong = format!("G {}", "1".repeat(40));
+    for bad in [
+        "X",
+        "G 1",
+        "G 1 2 3",
+        "G 40000 0",
+        "G 1x 2",
+        "P 1 2",
+        &overlong,
+    ] {
+        assert_eq!(reply(&mut a, bad).as_deref(), Some("ERR"), "{bad:?}");
+    }
+    // Each sensor at its phantom level, nothing in range (0.28 V of 5 V:
+    // simavr's ADC reference is 3.3 V, hence the scaling).
+    {
+        let mv = 280 * 3_300 / 5_000;
+        let mut pins = a.avr.pins();
+        pins.adc0().set_mv(mv);
+        pins.adc1().set_mv(mv);
+        pins.adc2().set_mv(mv);
+        pins.adc3().set_mv(mv);
+        pins.adc4().set_mv(mv);
+    }
+    assert_eq!(reply(&mut a, "P 100 200 0").as_deref(), Some("OK"));
+    assert_eq!(reply(&mut a, "G 3000 200").as_deref(), Some("OK"));
+    // The first step's telemetry: moving, straight on (heading 0), a step.
+    let t = a.read_line(300).expect("telemetry");
+    let f: Vec<&str> = t.split_whitespace().collect();
+    assert_eq!((f[0], f[2], f[3], f[5]), ("T", "100", "200", "M"), "{t}");
+    assert!(f[7].parse::<u32>().unwrap() > 0, "a step: {t}");
+    // The rover drives: the PWM pins pulse.
+    let pulses: u32 = (0..200).map(|_| wheels_for_1ms(&mut a).2).sum();
+    assert!(pulses > 0, "the motors run while driving");
+    assert_eq!(
+        reply(&mut a, "P 0 0 0").as_deref(),
+        Some("ERR"),
+        "no pose while driving"
+    );
+    assert_eq!(reply(&mut a, "S").as_deref(), Some("OK"));
+    let pulses: u32 = (0..100).map(|_| wheels_for_1ms(&mut a).2).sum();
+    assert_eq!(pulses, 0, "the motors are off after S");
+    let m = reply(&mut a, "M").unwrap();
+    assert!(m.starts_with("M stack_peak="), "{m}");
+    // Stopped, the pose may be set again; the firmware never reset.
+    assert_eq!(reply(&mut a, "P 0 0 0").as_deref(), Some("OK"));
+    assert_eq!(a.read_line(50), None, "no READY again: no reset");
+}
