@@ -67,6 +67,23 @@ pub struct Edge {
     pub blocked: bool,
 }
 
+impl Edge {
+    /// An edge's risk: `length · ((ρ₀ − c)/c)²` for a clearance `c`
+    /// below ρ₀, else 0 (the repulsive potential, module docs). A clearance
+    /// of 0 counts as 1 mm.
+    pub fn risk(&self, influence_mm: u16) -> u64 {
+        let c = self.clearance_mm.max(1) as u64;
+        let rho = influence_mm as u64;
+        if c >= rho {
+            return 0;
+        }
+        // (ρ₀ − c)/c in Q8: below 2^24 (ρ₀ < 2^16), squared below 2^48,
+        // times a u16 length below 2^64.
+        let q = ((rho - c) << 8) / c;
+        (self.length_mm as u64 * q * q) >> 16
+    }
+}
+
 /// A waypoint graph of at most `N` nodes and `E` edges, world mm.
 #[derive(Clone, Debug)]
 pub struct RouteMap<const N: usize, const E: usize> {
@@ -207,21 +224,6 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
                 e.blocked = true;
             }
         }
-    }
-
-    /// An edge's risk: `length · ((ρ₀ − c)/c)²` for a clearance `c`
-    /// below ρ₀, else 0 (the repulsive potential, module docs). A clearance
-    /// of 0 counts as 1 mm.
-    pub fn risk(e: &Edge, influence_mm: u16) -> u64 {
-        let c = e.clearance_mm.max(1) as u64;
-        let rho = influence_mm as u64;
-        if c >= rho {
-            return 0;
-        }
-        // (ρ₀ − c)/c in Q8: below 2^24 (ρ₀ < 2^16), squared below 2^48,
-        // times a u16 length below 2^64.
-        let q = ((rho - c) << 8) / c;
-        (e.length_mm as u64 * q * q) >> 16
     }
 
     /// Dijkstra from `from` to `to` over the unblocked edges, each edge's
@@ -366,7 +368,7 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
         r.nodes
             .windows(2)
             .filter_map(|w| self.edge_between(w[0], w[1]))
-            .map(|e| Self::risk(e, influence_mm))
+            .map(|e| e.risk(influence_mm))
             .fold(0u64, u64::saturating_add)
     }
 }
@@ -576,7 +578,7 @@ mod tests {
             length_mm: 1_000,
             blocked: false,
         };
-        let risk = |c| RouteMap::<2, 1>::risk(&e(c), 300);
+        let risk = |c| e(c).risk(300);
         assert_eq!(risk(300), 0);
         assert_eq!(risk(1_000), 0);
         // ((300 − 100)/100)² = 4 per mm of length.

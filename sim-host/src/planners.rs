@@ -68,6 +68,11 @@ pub fn to_point(p: V2) -> Point {
     Point::saturating((p.x * 1000.0).round() as i32, (p.y * 1000.0).round() as i32)
 }
 
+/// Metres to the core's whole millimetres, saturating at 0 and `u16::MAX`.
+pub fn to_mm(m: f64) -> u16 {
+    (m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16
+}
+
 /// The core's millimetres to metres.
 pub fn to_v2(p: Point) -> V2 {
     V2::new(p.x as f64 / 1000.0, p.y as f64 / 1000.0)
@@ -127,7 +132,7 @@ impl SimPlanner {
             PlannerKind::Route => {
                 let keep_m = sc.robot_radius + routemap::PREFERRED_MARGIN_M;
                 let route = RouteConfig {
-                    preferred_clearance_mm: (keep_m * 1000.0).round() as u16,
+                    preferred_clearance_mm: to_mm(keep_m),
                     ..RouteConfig::default()
                 };
                 let map = routemap::build(sc);
@@ -176,7 +181,7 @@ impl SimPlanner {
 
     /// The guard: may the advance go on for `remaining_m`?
     pub fn guard(&mut self, raw: &RawCounts, remaining_m: f64) -> bool {
-        let mm = (remaining_m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16;
+        let mm = to_mm(remaining_m);
         let g = match &mut self.core {
             Core::Eapf(p) => p.guard_raw(raw, mm),
             Core::Apf(p) => p.guard_raw(raw, mm),

@@ -11,9 +11,9 @@
 //! the least distance from its segment to the static geometry.
 
 use crate::geom::V2;
+use crate::planners::{to_mm, to_point};
 use crate::scenario::Scenario;
 use crate::world::World;
-use planner_core::fixed::Point;
 use planner_core::route::RouteMap;
 use std::collections::HashMap;
 
@@ -38,14 +38,6 @@ const MARGIN_M: f64 = 0.04;
 /// into it (docs/bench.md, "The route layer").
 pub const PREFERRED_MARGIN_M: f64 = 0.08;
 
-fn mm(p: V2) -> Point {
-    crate::planners::to_point(p)
-}
-
-fn clearance_mm(c: f64) -> u16 {
-    (c * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16
-}
-
 /// The graph for `sc` (static obstacles only), with the start and the goal
 /// among its nodes.
 pub fn build(sc: &Scenario) -> SimRouteMap {
@@ -65,7 +57,7 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
     for j in 1..ny.max(1) {
         for i in 1..nx.max(1) {
             if world.clearance(at(i, j), 0.0) >= need {
-                if let Ok(k) = map.add_node(mm(at(i, j))) {
+                if let Ok(k) = map.add_node(to_point(at(i, j))) {
                     grid.insert((i, j), k);
                 }
             }
@@ -80,7 +72,7 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
             };
             let c = world.static_sweep_clearance(at(i, j), at(i + di, j + dj));
             if c >= need {
-                let _ = map.add_edge(a, b, clearance_mm(c));
+                let _ = map.add_edge(a, b, to_mm(c));
             }
         }
     }
@@ -89,7 +81,7 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
     let ends = [sc.start, sc.goal].map(|p| V2::new(p[0], p[1]));
     let mut end_nodes = Vec::new();
     for p in ends {
-        let Ok(k) = map.add_node(mm(p)) else {
+        let Ok(k) = map.add_node(to_point(p)) else {
             continue;
         };
         end_nodes.push((k, p));
@@ -98,7 +90,7 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
             if p.dist(q) <= 2.5 * s {
                 let c = world.static_sweep_clearance(p, q);
                 if c >= r {
-                    let _ = map.add_edge(k, b, clearance_mm(c));
+                    let _ = map.add_edge(k, b, to_mm(c));
                 }
             }
         }
@@ -106,7 +98,7 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
     if let [(a, p), (b, q)] = end_nodes[..] {
         let c = world.static_sweep_clearance(p, q);
         if c >= need {
-            let _ = map.add_edge(a, b, clearance_mm(c));
+            let _ = map.add_edge(a, b, to_mm(c));
         }
     }
     map

@@ -1,21 +1,17 @@
 //! The command line as users call it.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::Command;
 
 fn corridor() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/traps/corridor.toml")
 }
 
-#[test]
-fn bench_over_several_seeds_prints_each_and_the_aggregate() {
-    let dir = std::env::temp_dir().join(format!("sim-host-cli-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("runs.jsonl");
+/// `sim-host ARGS… PATHS…`, which must succeed: its standard output.
+fn sim_host(args: &[&str], paths: &[&Path]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
-        .args(["bench", "--seed", "4", "--seeds", "2", "--json"])
-        .arg(&json)
-        .arg(corridor())
+        .args(args)
+        .args(paths)
         .output()
         .unwrap();
     assert!(
@@ -23,7 +19,18 @@ fn bench_over_several_seeds_prints_each_and_the_aggregate() {
         "{}",
         String::from_utf8_lossy(&out.stderr)
     );
-    let text = String::from_utf8(out.stdout).unwrap();
+    String::from_utf8(out.stdout).unwrap()
+}
+
+#[test]
+fn bench_over_several_seeds_prints_each_and_the_aggregate() {
+    let dir = std::env::temp_dir().join(format!("sim-host-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("runs.jsonl");
+    let text = sim_host(
+        &["bench", "--seed", "4", "--seeds", "2", "--json"],
+        &[&json, &corridor()],
+    );
     let lines: Vec<&str> = text.lines().collect();
     assert_eq!(lines.len(), 3, "{text}");
     assert!(lines[0].starts_with("seed 4: runs 1 |"), "{text}");
@@ -75,18 +82,10 @@ fn a_reader_that_leaves_early_is_no_panic() {
 fn run_with_the_route_layer_reports_its_route_and_draws_it() {
     let dir = std::env::temp_dir().join(format!("sim-host-route-{}", std::process::id()));
     let svg = dir.join("corridor.svg");
-    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
-        .args(["run", "--planner", "route", "--svg"])
-        .arg(&svg)
-        .arg(corridor())
-        .output()
-        .unwrap();
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+    let text = sim_host(
+        &["run", "--planner", "route", "--svg"],
+        &[&svg, &corridor()],
     );
-    let text = String::from_utf8(out.stdout).unwrap();
     assert!(text.contains("outcome      reached"), "{text}");
     let route = text.lines().find(|l| l.starts_with("route ")).unwrap_or("");
     assert!(route.contains(" waypoints, "), "{text}");

@@ -13,6 +13,11 @@ fn library() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios")
 }
 
+/// These files of the library.
+fn library_files(rel: &[&str]) -> Vec<PathBuf> {
+    rel.iter().map(|f| library().join(f)).collect()
+}
+
 #[test]
 fn trap_suite_outcomes() {
     let files = collect(&[library()]).unwrap();
@@ -84,14 +89,11 @@ fn classical_apf_fails_where_the_papers_say() {
         max_steps: 600,
         ..SimConfig::default()
     };
-    let files: Vec<PathBuf> = [
+    let files = library_files(&[
         "paper/env1-ex2.toml",
         "traps/u-trap.toml",
         "traps/two-obstacles.toml",
-    ]
-    .iter()
-    .map(|f| library().join(f))
-    .collect();
+    ]);
     let rows = run_all(&files, &cfg, false).unwrap();
     let outcome = |name: &str| rows.iter().find(|r| r.name == name).unwrap().outcome;
     assert_eq!(outcome("env1-ex2"), Outcome::Reached);
@@ -111,16 +113,13 @@ fn the_route_layer_drives_the_traps_near_the_shortest_path() {
         planner: PlannerKind::Route,
         ..SimConfig::default()
     };
-    let files: Vec<PathBuf> = [
+    let files = library_files(&[
         "traps/u-trap.toml",
         "traps/dead-end.toml",
         "traps/rooms.toml",
         "traps/comb.toml",
         "traps/walled-in.toml",
-    ]
-    .iter()
-    .map(|f| library().join(f))
-    .collect();
+    ]);
     let rows = run_all(&files, &cfg, false).unwrap();
     for r in &rows {
         assert_ne!(r.outcome, Outcome::Collision, "{} collided", r.name);

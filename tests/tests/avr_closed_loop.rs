@@ -2,7 +2,7 @@
 //! worlds and sensors on its ADC pins, its motor pins and encoder inputs
 //! closing the loop (see `rover_tests::avr::drive`).
 
-use rover_tests::avr::{drive, drive_with, LoopOutcome, Unplug};
+use rover_tests::avr::{drive, drive_with, LoopOutcome, LoopRun, Unplug};
 use rover_tests::scenario;
 
 fn reaches(rel: &str) {
@@ -21,10 +21,6 @@ fn reaches(rel: &str) {
     // Allow 50 mm plus 0.5 % of the path. (Summing each wheel's travel
     // regardless of direction, as the harness first did, made an edge of
     // every back-and-forth across none: 0.68 m off after 30 m.)
-    // Arrived, it stays put: no PWM pulse after the line that says so.
-    let (high, moved_m) = run.after_stop.expect("a stop");
-    assert_eq!(high, 0, "{}: motor pulses after arriving", sc.name);
-    assert!(moved_m < 1e-3, "{}: moved {moved_m} m", sc.name);
     let bound_m = 0.05 + 0.005 * run.path_m;
     assert!(
         run.to_goal_m < bound_m,
@@ -34,6 +30,16 @@ fn reaches(rel: &str) {
         run.path_m,
         bound_m
     );
+    // Arrived, it stays put: no PWM pulse after the line that says so.
+    stays_stopped(&run, &format!("{}: after arriving", sc.name));
+}
+
+/// After the line that says why it stopped, the firmware keeps its motors
+/// off: no PWM pulse in the next 100 ms, and the rover does not move.
+fn stays_stopped(run: &LoopRun, what: &str) {
+    let (high, moved_m) = run.after_stop.expect("a stop");
+    assert_eq!(high, 0, "{what}: motor pulses");
+    assert!(moved_m < 1e-3, "{what}: moved {moved_m} m");
 }
 
 #[test]
@@ -62,9 +68,7 @@ fn unplugged_sensor_stops_the_rover(sensor: usize, at_s: f64) {
         "reported at {:.2} s",
         run.seconds
     );
-    let (high, moved_m) = run.after_stop.expect("a stop");
-    assert_eq!(high, 0, "motor pulses after the fault");
-    assert!(moved_m < 1e-3, "moved {moved_m} m after the fault");
+    stays_stopped(&run, "after the fault");
 }
 
 #[test]
@@ -88,7 +92,5 @@ fn a_walled_in_goal_is_reported_unreachable() {
         sc.name, run.outcome, run.seconds, run.steps, run.path_m, run.after_stop
     );
     assert_eq!(run.outcome, LoopOutcome::Unreachable, "{}", sc.name);
-    let (high, moved_m) = run.after_stop.expect("a stop");
-    assert_eq!(high, 0, "motor pulses after giving up");
-    assert!(moved_m < 1e-3, "moved {moved_m} m after giving up");
+    stays_stopped(&run, "after giving up");
 }
