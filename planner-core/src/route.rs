@@ -8,11 +8,11 @@
 //! when one is blocked.
 //!
 //! Allocation-free: the map's capacity is in its type (`N` nodes, `E`
-//! edges; a few dozen fit an MCU's flash, the simulator uses hundreds), and
-//! a search keeps its work on the stack (7 bytes a node, 1 an edge; a
-//! plan also its candidates, 2 bytes a node each). A search is `O(N·E)`:
-//! fine for the maps it is meant for, and run only at the start and when a
-//! leg is blocked.
+//! edges; a few dozen fit an MCU's flash, the simulator uses thousands),
+//! and a search keeps its work on the stack (7 bytes a node, 1 an edge; a
+//! plan also its candidates, 2 bytes a node each). A search is `O(N² + E)`
+//! (each node's own edges are listed, [`RouteMap`]), and runs only at the
+//! start and when a leg is blocked.
 //!
 //! Ours, where the paper's page is silent:
 //! - A map gives each edge its clearance: the least distance from the
@@ -29,8 +29,14 @@
 //!   Of those no longer than `1 + slack` times the shortest, the one of
 //!   least risk is taken (the shorter on a tie): safety is bought with a
 //!   bounded detour only.
+//! - Edges at least `preferred_clearance_mm` clear are kept to while a
+//!   route over them is within the slack of the shortest route over any
+//!   edge: safety bought with a bounded detour, as for the candidates.
 //! - A waypoint counts as passed within `pass_mm`, the goal as reached
-//!   within the planner's goal tolerance.
+//!   within the planner's goal tolerance. Waypoints in a row that lie
+//!   within `straighten_mm` of one straight line are one leg, driven to
+//!   its far end: the planner meets a corridor or a gap as it would
+//!   without a map, not as a chain of near targets.
 //! - No route on the graph is no proof that there is no way (a coarse
 //!   graph misses a narrow gap): the planner then drives to the goal
 //!   directly, and its own give-up budget (the escape's) decides whether
@@ -85,10 +91,20 @@ impl Edge {
 }
 
 /// A waypoint graph of at most `N` nodes and `E` edges, world mm.
+///
+/// Each node keeps a list of its own edges (its newest edge, and for each
+/// edge the next one at either end: 2 bytes a node and 4 an edge), so that
+/// a search looks at a node's few edges rather than at all of them: a
+/// search is `O(N² + E)`, and a map of a few thousand nodes (the
+/// simulator's, on a 0.2 m grid) is planned in milliseconds.
 #[derive(Clone, Debug)]
 pub struct RouteMap<const N: usize, const E: usize> {
     nodes: heapless::Vec<Point, N>,
     edges: heapless::Vec<Edge, E>,
+    /// Each node's newest edge (`NONE`: none).
+    first: [u16; N],
+    /// For each edge, the next older edge at its `a` end and at its `b` end.
+    next: [[u16; 2]; E],
 }
 
 impl<const N: usize, const E: usize> Default for RouteMap<N, E> {
@@ -112,7 +128,8 @@ pub struct RouteConfig {
     /// A waypoint is passed once the rover is this near it, mm.
     pub pass_mm: u16,
     /// Routes keep to edges at least this clear of obstacles, mm, while
-    /// one exists; only then are narrower edges used (0: any edge).
+    /// such a route is within `slack_pct` of the shortest over any edge;
+    /// else narrower edges are used too (0: any edge).
     pub preferred_clearance_mm: u16,
     /// Planner cycles a leg may take before it is given up (blocked) like
     /// one the planner gives up on: a leg is a few hundred mm, and one the
@@ -120,21 +137,34 @@ pub struct RouteConfig {
     /// corridor barely does) would otherwise hold it for the planner's
     /// whole give-up budget.
     pub leg_cycles: u16,
+    /// Waypoints in a row that all lie within this of the straight line
+    /// from the waypoint passed last to the last of them are one leg, mm
+    /// (0: every waypoint its own leg). A grid graph's routes are chains of
+    /// short edges; driven one by one, each a near target, the planner
+    /// crawls (in a corridor the simulator's graph has a node every
+    /// 0.2 m). The straight leg stays within this of the edges it
+    /// replaces, so its clearance is theirs less this.
+    pub straighten_mm: u16,
 }
 
 impl Default for RouteConfig {
-    /// ρ₀ = 300 mm (the classical APF baseline's ρ, `apf`), 25 % slack
+    /// ρ₀ = 200 mm (with 300, the classical APF baseline's ρ, the safest
+    /// candidate ran wider of every obstacle than the preferred clearance
+    /// asks, for longer paths: docs/bench.md "The route layer"), 25 % slack
     /// (the product's path-length aim), four candidates, waypoints passed
     /// within 250 mm (a step or so: the planner does not stop at each),
-    /// any edge clearance, 100 cycles a leg.
+    /// any edge clearance, 100 cycles a leg, waypoints within 20 mm of a
+    /// straight leg merged into it (half the planner's clearance; 0 and
+    /// 40 mm measured worse, docs/bench.md "The route layer").
     fn default() -> Self {
         RouteConfig {
-            influence_mm: 300,
+            influence_mm: 200,
             slack_pct: 25,
             candidates: 4,
             pass_mm: 250,
             preferred_clearance_mm: 0,
             leg_cycles: 100,
+            straighten_mm: 20,
         }
     }
 }
@@ -159,6 +189,8 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
         RouteMap {
             nodes: heapless::Vec::new(),
             edges: heapless::Vec::new(),
+            first: [NONE; N],
+            next: [[NONE; 2]; E],
         }
     }
 
@@ -182,6 +214,11 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
         if a == b {
             return Err(MapError::BadEdge);
         }
+        // Edge indices are u16 too, `NONE` reserved.
+        let k = self.edges.len();
+        if k >= NONE as usize {
+            return Err(MapError::Full);
+        }
         let (dx, dy) = pa.to(pb);
         let edge = Edge {
             a,
@@ -190,7 +227,32 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
             length_mm: hypot(dx, dy),
             blocked: false,
         };
-        self.edges.push(edge).map_err(|_| MapError::Full)
+        self.edges.push(edge).map_err(|_| MapError::Full)?;
+        // Both ends' lists start with it now (the nodes exist: checked above).
+        let (Some(fa), Some(fb), Some(next)) = (
+            self.first.get(a as usize).copied(),
+            self.first.get(b as usize).copied(),
+            self.next.get_mut(k),
+        ) else {
+            return Err(MapError::Full);
+        };
+        *next = [fa, fb];
+        self.first[a as usize] = k as u16;
+        self.first[b as usize] = k as u16;
+        Ok(())
+    }
+
+    /// The edges at node `u` (newest first), each with its index and the
+    /// node at its other end.
+    fn edges_at(&self, u: u16) -> impl Iterator<Item = (usize, &Edge, u16)> + '_ {
+        let mut k = self.first.get(u as usize).copied().unwrap_or(NONE);
+        core::iter::from_fn(move || {
+            let i = k as usize;
+            let e = self.edges.get(i)?;
+            let end = usize::from(e.a != u);
+            k = self.next.get(i).map_or(NONE, |n| n[end]);
+            Some((i, e, if end == 0 { e.b } else { e.a }))
+        })
     }
 
     /// The waypoints.
@@ -219,10 +281,13 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
 
     /// Block the edges between `a` and `b` (either way): routes avoid them.
     pub fn block(&mut self, a: u16, b: u16) {
-        for e in self.edges.iter_mut() {
+        let mut k = self.first.get(a as usize).copied().unwrap_or(NONE);
+        while let Some(e) = self.edges.get_mut(k as usize) {
+            let end = usize::from(e.a != a);
             if (e.a, e.b) == (a, b) || (e.a, e.b) == (b, a) {
                 e.blocked = true;
             }
+            k = self.next.get(k as usize).map_or(NONE, |n| n[end]);
         }
     }
 
@@ -244,8 +309,8 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
         let mut times = [0u8; E];
         for r in penalised {
             for w in r.nodes.windows(2) {
-                for (t, e) in times.iter_mut().zip(self.edges.iter()) {
-                    if same_edge(w, e) {
+                for (k, _, v) in self.edges_at(w[0]) {
+                    if let (true, Some(t)) = (v == w[1], times.get_mut(k)) {
                         *t = t.saturating_add(1);
                     }
                 }
@@ -269,13 +334,11 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
                 break;
             }
             done[u as usize] = true;
-            for (e, &t) in self.edges.iter().zip(times.iter()) {
-                let v = match (e.a == u, e.b == u) {
-                    _ if e.blocked || e.clearance_mm < min_clearance_mm => continue,
-                    (true, _) => e.b,
-                    (_, true) => e.a,
-                    _ => continue,
-                };
+            for (k, e, v) in self.edges_at(u) {
+                if e.blocked || e.clearance_mm < min_clearance_mm {
+                    continue;
+                }
+                let t = times.get(k).copied().unwrap_or(0);
                 let w = (e.length_mm as u32) << t.min(8);
                 let alt = best.saturating_add(w);
                 if alt < dist[v as usize] {
@@ -316,19 +379,29 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
 
     /// The shortest unblocked edge between `a` and `b`.
     fn edge_between(&self, a: u16, b: u16) -> Option<&Edge> {
-        self.edges
-            .iter()
-            .filter(|e| !e.blocked && same_edge(&[a, b], e))
+        self.edges_at(a)
+            .filter(|&(_, e, v)| v == b && !e.blocked)
+            .map(|(_, e, _)| e)
             .min_by_key(|e| e.length_mm)
     }
 
     /// The route from `from` to `to` (node indices): of Dijkstra's
     /// candidates within the length slack, the one of least risk (module
-    /// docs), over the edges of the preferred clearance if they join them.
-    /// `None` if no unblocked route does.
+    /// docs), over the edges of the preferred clearance if they join them
+    /// within the slack of the shortest route over any edge. `None` if no
+    /// unblocked route does.
     pub fn plan(&self, from: u16, to: u16, cfg: &RouteConfig) -> Option<Route<N>> {
-        self.plan_over(from, to, cfg, cfg.preferred_clearance_mm)
-            .or_else(|| self.plan_over(from, to, cfg, 0))
+        let any = self.plan_over(from, to, cfg, 0)?;
+        if cfg.preferred_clearance_mm == 0 {
+            return Some(any);
+        }
+        let shortest = self.shortest(from, to, 0, &[])?.length_mm as u64;
+        match self.plan_over(from, to, cfg, cfg.preferred_clearance_mm) {
+            Some(r) if r.length_mm as u64 * 100 <= shortest * (100 + cfg.slack_pct as u64) => {
+                Some(r)
+            }
+            _ => Some(any),
+        }
     }
 
     /// [`RouteMap::plan`] over the edges at least `min_clearance_mm` clear.
@@ -373,8 +446,25 @@ impl<const N: usize, const E: usize> RouteMap<N, E> {
     }
 }
 
-fn same_edge(w: &[u16], e: &Edge) -> bool {
-    (w[0], w[1]) == (e.a, e.b) || (w[0], w[1]) == (e.b, e.a)
+/// How far `p` lies from the segment `a`–`b`, mm (rounded down; a point
+/// beside the segment by its perpendicular, others by the nearer end).
+fn off_segment_mm(a: Point, b: Point, p: Point) -> u32 {
+    let (dx, dy) = a.to(b);
+    let (px, py) = a.to(p);
+    let (dx, dy, px, py) = (dx as i64, dy as i64, px as i64, py as i64);
+    let along = px * dx + py * dy;
+    let len_sq = dx * dx + dy * dy;
+    if along <= 0 || len_sq == 0 {
+        return hypot(px as i32, py as i32) as u32;
+    }
+    if along >= len_sq {
+        let (qx, qy) = b.to(p);
+        return hypot(qx, qy) as u32;
+    }
+    // |cross| / |ab|: |ab| ≥ 1 here, and both below 2^34.
+    let cross = (px * dy - py * dx).unsigned_abs();
+    let len = hypot(dx as i32, dy as i32).max(1) as u64;
+    (cross / len) as u32
 }
 
 /// The EAPF planner driven along a route of a known map (module docs).
@@ -447,12 +537,39 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
         self.planned = true;
     }
 
-    /// The point being driven to: the next waypoint, or the goal.
+    /// Waypoint `i` of the route; `route.len()` is the goal.
+    fn point(&self, i: usize) -> Option<Point> {
+        match self.route.get(i) {
+            Some(&n) => self.map.nodes().get(n as usize).copied(),
+            None => (i == self.route.len()).then_some(self.goal),
+        }
+    }
+
+    /// The index of the waypoint being driven to (`route.len()`: the goal):
+    /// from the next one on, the last of those that all lie within
+    /// `straighten_mm` of the straight line from the waypoint passed last
+    /// to it (`RouteConfig::straighten_mm`).
+    fn target_index(&self) -> usize {
+        let from = match self.next.checked_sub(1).and_then(|i| self.point(i)) {
+            Some(p) if self.cfg.straighten_mm > 0 => p,
+            _ => return self.next,
+        };
+        let mut k = self.next;
+        while let Some(to) = self.point(k + 1) {
+            let near = (self.next..=k)
+                .filter_map(|i| self.point(i))
+                .all(|p| off_segment_mm(from, to, p) <= self.cfg.straighten_mm as u32);
+            if !near {
+                break;
+            }
+            k += 1;
+        }
+        k
+    }
+
+    /// The point being driven to: a waypoint, or the goal.
     fn target(&self) -> Point {
-        self.route
-            .get(self.next)
-            .and_then(|&i| self.map.nodes().get(i as usize).copied())
-            .unwrap_or(self.goal)
+        self.point(self.target_index()).unwrap_or(self.goal)
     }
 
     /// One cycle, as [`Planner::step_raw`]: waypoints within `pass_mm` are
@@ -469,8 +586,9 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
         // At most one pass and one replan per node of the route each
         // cycle: the loop ends.
         for _ in 0..=2 * N + 2 {
-            let target = self.target();
-            let is_goal = self.next >= self.route.len();
+            let k = self.target_index();
+            let target = self.point(k).unwrap_or(self.goal);
+            let is_goal = k >= self.route.len();
             if self.planner.goal() != target {
                 self.planner.set_goal(target);
                 self.on_leg = 0;
@@ -478,7 +596,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
             if !is_goal {
                 let (dx, dy) = pose.position.to(target);
                 if hypot(dx, dy) <= self.cfg.pass_mm {
-                    self.next += 1;
+                    self.next = k + 1;
                     continue;
                 }
             }
@@ -491,21 +609,36 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
                 _ => false,
             };
             match out.status {
-                Status::Arrived if !is_goal => self.next += 1,
+                Status::Arrived if !is_goal => self.next = k + 1,
+                // The waypoints merged into the last leg are passed too.
+                Status::Arrived => {
+                    self.next = k;
+                    return out;
+                }
                 _ if given_up && !is_goal => {
-                    // Block the leg from the last waypoint to this one (to
-                    // the first: from the node nearest the rover) and plan
-                    // again.
-                    let to = self.route.get(self.next).copied();
+                    // Block the leg's edges from the last waypoint to this
+                    // one (to the first: from the node nearest the rover)
+                    // and plan again.
                     let from = match self.next.checked_sub(1) {
                         Some(i) => self.route.get(i).copied(),
                         None => self.map.nearest_node(pose.position),
                     };
-                    match (from, to) {
-                        (Some(from), Some(to)) if from != to => self.map.block(from, to),
+                    let mut blocked = false;
+                    let mut a = from;
+                    for i in self.next..=k {
+                        let b = self.route.get(i).copied();
+                        if let (Some(a), Some(b)) = (a, b) {
+                            if a != b {
+                                self.map.block(a, b);
+                                blocked = true;
+                            }
+                        }
+                        a = b;
+                    }
+                    if !blocked {
                         // A waypoint the rover stands at yet cannot reach:
                         // no leg to block; drive to the goal directly.
-                        _ => self.route.clear(),
+                        self.route.clear();
                     }
                     if !self.route.is_empty() {
                         self.replan(pose.position);
@@ -535,6 +668,59 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    proptest::proptest! {
+        /// The search over each node's own edges finds routes as long as
+        /// the shortest by Bellman-Ford over the whole edge list, blocked
+        /// and too narrow edges left out, on random graphs (parallel
+        /// edges included); and a route found is a chain of such edges.
+        #[test]
+        fn the_search_over_node_lists_finds_the_shortest_length(
+            points in proptest::collection::vec((-2_000i16..2_000, -2_000i16..2_000), 2..12),
+            edges in proptest::collection::vec((0u16..12, 0u16..12, 0u16..300), 0..40),
+            blocked in proptest::collection::vec((0u16..12, 0u16..12), 0..4),
+            min_clearance in 0u16..200,
+        ) {
+            let mut m: RouteMap<12, 40> = RouteMap::new();
+            for &(x, y) in &points {
+                m.add_node(Point::new(x, y)).unwrap();
+            }
+            let n = points.len() as u16;
+            for &(a, b, c) in &edges {
+                let r = m.add_edge(a, b, c);
+                proptest::prop_assert_eq!(r.is_ok(), a < n && b < n && a != b);
+            }
+            for &(a, b) in &blocked {
+                m.block(a, b);
+            }
+            let usable = |e: &Edge| !e.blocked && e.clearance_mm >= min_clearance;
+            // Bellman-Ford from node 0.
+            let mut dist = std::vec![u32::MAX; n as usize];
+            dist[0] = 0;
+            for _ in 0..n {
+                for e in m.edges().iter().filter(|e| usable(e)) {
+                    for (u, v) in [(e.a, e.b), (e.b, e.a)] {
+                        let d = dist[u as usize].saturating_add(e.length_mm as u32);
+                        if d < dist[v as usize] {
+                            dist[v as usize] = d;
+                        }
+                    }
+                }
+            }
+            for to in 1..n {
+                let found = m.shortest(0, to, min_clearance, &[]);
+                proptest::prop_assert_eq!(found.as_ref().map(|r| r.length_mm), (dist[to as usize] != u32::MAX).then_some(dist[to as usize]));
+                if let Some(r) = found {
+                    proptest::prop_assert_eq!(r.nodes.first(), Some(&0));
+                    proptest::prop_assert_eq!(r.nodes.last(), Some(&to));
+                    for w in r.nodes.windows(2) {
+                        proptest::prop_assert!(m.edges().iter().any(|e| usable(e)
+                            && ((e.a, e.b) == (w[0], w[1]) || (e.a, e.b) == (w[1], w[0]))));
+                    }
+                }
+            }
+        }
+    }
 
     /// A ladder: two rails of `n` nodes 500 mm apart, rungs between them;
     /// the lower rail runs 50 mm from obstacles, the upper 400 mm.
@@ -566,7 +752,11 @@ mod tests {
         m.block(4, 2);
         let r = m.shortest(0, 8, 0, &[]).unwrap();
         assert_eq!(r.length_mm, 3_000, "{:?}", r.nodes);
-        assert!(!r.nodes.windows(2).any(|w| same_edge(w, &m.edges()[3])));
+        let e = m.edges()[3];
+        assert!(!r
+            .nodes
+            .windows(2)
+            .any(|w| (w[0], w[1]) == (e.a, e.b) || (w[0], w[1]) == (e.b, e.a)));
     }
 
     #[test]
@@ -592,17 +782,18 @@ mod tests {
     fn the_safer_route_is_taken_within_the_slack() {
         // The lower rail is shortest (2,000 mm) but runs 50 mm from
         // obstacles (risk 2,000 · 25); the upper one (two rungs more:
-        // 3,000 mm, 1.5×) runs 400 mm from them.
+        // 3,000 mm, 1.5×) runs 400 mm from them; ρ₀ 300 mm.
         let m = ladder(5);
         let tight = RouteConfig {
             slack_pct: 25,
+            influence_mm: 300,
             ..RouteConfig::default()
         };
         let r = m.plan(0, 8, &tight).unwrap();
         assert_eq!(r.length_mm, 2_000, "25 % allows no detour of 50 %");
         let loose = RouteConfig {
             slack_pct: 60,
-            ..RouteConfig::default()
+            ..tight
         };
         let r = m.plan(0, 8, &loose).unwrap();
         assert_eq!(r.nodes.as_slice(), &[0, 1, 3, 5, 7, 9, 8]);
@@ -668,6 +859,39 @@ mod tests {
         panic!("not arrived: at {:?}", pose.position);
     }
 
+    /// Waypoints in a row within `straighten_mm` of a straight line are one
+    /// leg: the planner is sent to the last of them, not the next.
+    #[test]
+    fn waypoints_in_a_row_are_one_leg() {
+        // Nodes every 200 mm east, 10 mm off the line from the second
+        // on, then north to the goal's node.
+        let mut m: RouteMap<8, 8> = RouteMap::new();
+        for (x, y) in [(0, 0), (200, 10), (400, 0), (600, 10), (800, 0), (800, 800)] {
+            m.add_node(Point::new(x, y)).unwrap();
+        }
+        for i in 0..5 {
+            m.add_edge(i, i + 1, 500).unwrap();
+        }
+        let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
+            .build()
+            .unwrap();
+        let goal_for = |straighten_mm| {
+            let cfg = RouteConfig {
+                straighten_mm,
+                ..RouteConfig::default()
+            };
+            let mut p = RoutePlanner::new(config, m.clone(), cfg, Point::new(800, 800));
+            p.step_raw(Pose::default(), &CLEAR);
+            p.planner().goal()
+        };
+        // From the start node (passed, the rover stands on it): 200 mm
+        // ahead is within `pass_mm`, so the leg starts at the second
+        // node; the line to (800, 0) passes 10 mm from those between.
+        assert_eq!(goal_for(40), Point::new(800, 0));
+        assert_eq!(goal_for(9), Point::new(400, 0));
+        assert_eq!(goal_for(0), Point::new(400, 0));
+    }
+
     #[test]
     fn a_leg_the_planner_gives_up_on_is_blocked_and_another_route_taken() {
         let mut p = planner(RouteConfig {
@@ -707,17 +931,23 @@ mod tests {
     }
 
     #[test]
-    fn the_preferred_clearance_is_kept_while_a_route_keeps_it() {
+    fn the_preferred_clearance_is_kept_while_a_route_keeps_it_within_the_slack() {
         // The upper rail and the rungs are 200 mm clear or more, the
-        // lower rail 50 mm: preferring 150 mm takes the upper way whatever
-        // the slack; preferring more than any edge has falls back to all.
+        // lower rail 50 mm: preferring 150 mm takes the upper way (3,000
+        // mm) when the slack allows it beside the shortest (2,000 mm), even
+        // if the risk alone would not (influence 40 mm: no edge has risk);
+        // beyond the slack, or preferring more than any edge has, it falls
+        // back to all edges.
         let m = ladder(5);
-        let prefer = |mm| RouteConfig {
+        let prefer = |mm, slack_pct| RouteConfig {
             preferred_clearance_mm: mm,
+            slack_pct,
+            influence_mm: 40,
             ..RouteConfig::default()
         };
-        assert_eq!(m.plan(0, 8, &prefer(150)).unwrap().length_mm, 3_000);
-        assert_eq!(m.plan(0, 8, &prefer(1_000)).unwrap().length_mm, 2_000);
+        assert_eq!(m.plan(0, 8, &prefer(150, 50)).unwrap().length_mm, 3_000);
+        assert_eq!(m.plan(0, 8, &prefer(150, 49)).unwrap().length_mm, 2_000);
+        assert_eq!(m.plan(0, 8, &prefer(1_000, 50)).unwrap().length_mm, 2_000);
     }
 
     #[test]

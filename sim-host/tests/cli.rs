@@ -93,3 +93,40 @@ fn run_with_the_route_layer_reports_its_route_and_draws_it() {
     assert!(pic.contains(">route</text>"), "the legend names the route");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+#[test]
+fn gen_count_writes_a_folder_of_worlds_that_bench_reads() {
+    let dir = std::env::temp_dir().join(format!("sim-host-gen-{}", std::process::id()));
+    let text = sim_host(&["gen", "--count", "3", "--seed", "40"], &[&dir]);
+    assert_eq!(
+        text,
+        format!("wrote 3 worlds (seeds 40 to 42) to {}\n", dir.display())
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["gen-40.toml", "gen-41.toml", "gen-42.toml"]);
+    // Each the world `gen` writes alone for its seed.
+    let one = dir.join("one").join("gen-41.toml");
+    sim_host(&["gen", "--seed", "41"], &[&one]);
+    assert_eq!(
+        std::fs::read_to_string(&one).unwrap(),
+        std::fs::read_to_string(dir.join("gen-41.toml")).unwrap()
+    );
+    std::fs::remove_dir_all(dir.join("one")).unwrap();
+    let table = sim_host(&["bench", "--summary"], &[&dir]);
+    assert!(table.starts_with("runs 3 |"), "{table}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn gen_count_zero_is_a_usage_error() {
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["gen", "--count", "0", "unused"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--count"));
+}

@@ -104,7 +104,8 @@ fn classical_apf_fails_where_the_papers_say() {
 /// The route layer over the known map (`route`) drives the traps where the
 /// sensing planner alone detours (the u-trap, the dead end, the rooms and
 /// the comb: 2.6–6.0× the reference with `eapf`, docs/bench.md) within
-/// 1.25× of the shortest path, without a collision; the walled-in goal has
+/// 1.25× of the shortest path, without a collision, and the corridor and
+/// `gnron` (a route through a gap) within 1.25× too; the walled-in goal has
 /// no route, and is still not reached.
 #[test]
 fn the_route_layer_drives_the_traps_near_the_shortest_path() {
@@ -118,6 +119,8 @@ fn the_route_layer_drives_the_traps_near_the_shortest_path() {
         "traps/dead-end.toml",
         "traps/rooms.toml",
         "traps/comb.toml",
+        "traps/corridor.toml",
+        "traps/gnron.toml",
         "traps/walled-in.toml",
     ]);
     let rows = run_all(&files, &cfg, false).unwrap();
