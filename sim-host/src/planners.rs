@@ -29,7 +29,7 @@ pub enum PlannerKind {
     LiquidOnline,
     /// The route layer over the known map (Dijkstra's candidates, the
     /// safest within 25 % of the shortest), driven by the `eapf` planner
-    /// with its sensors from waypoint to waypoint.
+    /// with its sensors leg by leg.
     Route,
 }
 

@@ -122,7 +122,8 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
             }
         }
     }
-    add_gap_nodes(&mut map, &world, sc.bounds, s, need, &cells);
+    let grid_nodes: Vec<(u16, V2)> = cells.iter().map(|&((i, j), k)| (k, at(i, j))).collect();
+    add_gap_nodes(&mut map, &world, sc.bounds, s, need, &grid_nodes);
     // The start and the goal, joined to the grid nodes they see nearby,
     // to every node they see within `END_SIGHT_M` with the need (nearest
     // first), and to each other when in sight.
@@ -157,15 +158,15 @@ pub fn build(sc: &Scenario) -> SimRouteMap {
 }
 
 /// The gap nodes (module docs) of the world `world` within `bounds`, for
-/// a grid of spacing `s` whose nodes are `cells`, joined to the nodes near
-/// them.
+/// a grid of spacing `s` whose nodes are `grid` (index, position), joined
+/// to the nodes near them.
 fn add_gap_nodes(
     map: &mut SimRouteMap,
     world: &World,
     bounds: [f64; 4],
     s: f64,
     need: f64,
-    cells: &[((i32, i32), u16)],
+    grid: &[(u16, V2)],
 ) {
     let [x0, y0, x1, y1] = bounds;
     let h = GAP_SCAN_M;
@@ -217,9 +218,7 @@ fn add_gap_nodes(
             ((p.y - y0) / s).floor() as i32,
         )
     };
-    let grid_at = |i: i32, j: i32| V2::new(x0 + i as f64 * s, y0 + j as f64 * s);
-    for &((i, j), k) in cells {
-        let p = grid_at(i, j);
+    for &(k, p) in grid {
         near.entry(cell_of(p)).or_default().push((k, p));
     }
     let mut gaps: Vec<_> = best.into_iter().collect();
