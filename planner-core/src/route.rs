@@ -32,8 +32,9 @@
 //! - Edges at least `preferred_clearance_mm` clear are kept to while a
 //!   route over them is within the slack of the shortest route over any
 //!   edge: safety bought with a bounded detour, as for the candidates.
-//! - A waypoint counts as passed within `pass_mm`, the goal as reached
-//!   within the planner's goal tolerance. Waypoints in a row that lie
+//! - A waypoint counts as passed within `pass_mm` (before a tight edge,
+//!   within what that edge has to spare), the goal as reached within the
+//!   planner's goal tolerance. Waypoints in a row that lie
 //!   within `straighten_mm` of one straight line are one leg, driven to
 //!   its far end: the planner meets a corridor or a gap as it would
 //!   without a map, not as a chain of near targets.
@@ -125,7 +126,9 @@ pub struct RouteConfig {
     /// How many candidates Dijkstra offers (1: the shortest only; at most
     /// 8 are looked at).
     pub candidates: u8,
-    /// A waypoint is passed once the rover is this near it, mm.
+    /// A waypoint is passed once the rover is this near it, mm (before an
+    /// edge with less than the planner's clearance to spare, only as near
+    /// as that edge has to spare).
     pub pass_mm: u16,
     /// Routes keep to edges at least this clear of obstacles, mm, while
     /// such a route is within `slack_pct` of the shortest over any edge;
@@ -587,6 +590,37 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
         self.point(self.target_index()).unwrap_or(self.goal)
     }
 
+    /// How near waypoint `k` the rover must come to pass it: `pass_mm`,
+    /// or, before a tight edge, only what that edge has to spare. A rover
+    /// that passes a waypoint early cuts the corner; an edge with less to
+    /// spare than the planner's clearance beyond the disc and that
+    /// clearance (a gap a little wider than the rover needs) would then be
+    /// met off its line, at the mouth's edge, where the safety rule stops
+    /// the rover (the library's narrow passage, 10 mm to spare: on four
+    /// seeds of five the rover turned about at the mouth, 3.1–3.8× the
+    /// reference). Roomier edges keep `pass_mm`: with `pass_mm` cut to
+    /// the spare before every edge with less than it to spare, the
+    /// examples' routes were longer (docs/bench.md, "The route layer").
+    fn pass_mm(&self, k: usize) -> u16 {
+        let (Some(&a), Some(&b)) = (self.route.get(k), self.route.get(k + 1)) else {
+            return self.cfg.pass_mm;
+        };
+        let cfg = self.planner.config();
+        let need = cfg.robot_radius_mm + cfg.clearance_mm;
+        let spare = self
+            .map
+            .edges_at(a)
+            .filter(|&(_, _, other)| other == b)
+            .map(|(_, e, _)| e.clearance_mm.saturating_sub(need))
+            .max()
+            .unwrap_or(u16::MAX);
+        if spare < cfg.clearance_mm {
+            spare
+        } else {
+            self.cfg.pass_mm
+        }
+    }
+
     /// One cycle, as [`Planner::step_raw`]: waypoints within `pass_mm` are
     /// passed; a waypoint reached is passed; a leg the planner gives up on,
     /// or that takes more than `leg_cycles`, is blocked and the route
@@ -610,7 +644,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
             }
             if !is_goal {
                 let (dx, dy) = pose.position.to(target);
-                if hypot(dx, dy) <= self.cfg.pass_mm {
+                if hypot(dx, dy) <= self.pass_mm(k) {
                     self.next = k + 1;
                     continue;
                 }
@@ -905,6 +939,41 @@ mod tests {
         assert_eq!(goal_for(40), Point::new(800, 0));
         assert_eq!(goal_for(9), Point::new(400, 0));
         assert_eq!(goal_for(0), Point::new(400, 0));
+    }
+
+    #[test]
+    fn a_waypoint_before_a_tight_edge_is_not_passed_early() {
+        // Start, a waypoint 600 mm east, the goal's node 600 mm north of
+        // it. 200 mm short of the waypoint (within `pass_mm`) the rover
+        // passes it when the edge on is roomy, and not when that edge has
+        // 10 mm to spare beyond the disc and the clearance (a gap).
+        let goal_after = |clearance_mm| {
+            let mut m: RouteMap<4, 4> = RouteMap::new();
+            for (x, y) in [(0, 0), (600, 0), (600, 600)] {
+                m.add_node(Point::new(x, y)).unwrap();
+            }
+            m.add_edge(0, 1, 500).unwrap();
+            m.add_edge(1, 2, clearance_mm).unwrap();
+            let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
+                .build()
+                .unwrap();
+            let need = config.robot_radius_mm + config.clearance_mm;
+            assert_eq!(need, 140);
+            let goal = Point::new(600, 600);
+            let mut p = RoutePlanner::new(config, m, RouteConfig::default(), goal);
+            p.step_raw(Pose::default(), &CLEAR);
+            assert_eq!(p.planner().goal(), Point::new(600, 0));
+            let near = Pose {
+                position: Point::new(400, 0),
+                heading: crate::Angle::ZERO,
+            };
+            p.step_raw(near, &CLEAR);
+            p.planner().goal()
+        };
+        assert_eq!(goal_after(500), Point::new(600, 600));
+        assert_eq!(goal_after(150), Point::new(600, 0));
+        // 40 mm to spare (the planner's clearance) is roomy enough.
+        assert_eq!(goal_after(180), Point::new(600, 600));
     }
 
     #[test]

@@ -20,6 +20,13 @@
 //! and highest across the passage (a ridge of the clearance: the middle of
 //! a gap), the best such point of each grid cell is a node too, joined to
 //! every node within 2.25 spacings that it sees with the disc plus 40 mm.
+//! A strip narrower than the scan's spacing can lie between its points,
+//! each short of the need (the library's narrow passage: a strip 20 mm
+//! wide, its middle 20 mm from the scan's rows on either side, which are
+//! 10 mm short of the need): a ridge point up to
+//! h/√2 short of it (the farthest a scan point can be from the strip) is
+//! searched within half a step in 5 mm steps for a point that fits with
+//! 5 mm to spare (a narrower strip no rover hits).
 
 use crate::geom::V2;
 use crate::planners::{to_mm, to_point, to_v2};
@@ -44,6 +51,19 @@ const GRID_SHARE: f64 = 0.8;
 
 /// How finely the clearance is scanned for gap nodes, m.
 const GAP_SCAN_M: f64 = 0.04;
+
+/// How finely the scan's candidates are searched for the highest
+/// clearance near them, m: a strip of centre positions narrower than the
+/// scan's spacing lies between two of its points, each below the need.
+const GAP_REFINE_M: f64 = 0.005;
+
+/// A gap the refining search finds must have this much to spare beyond
+/// the need, m: a strip of centre positions at least two search steps
+/// wide. Narrower ones are there in random worlds (gen-126: 1.9 mm to
+/// spare between two circles) and no rover hits them: the route layer
+/// sent the rover into one, it turned about at the mouth until the leg's
+/// budget ran out, and the path was 4.0× the reference instead of 2.0×.
+const GAP_MIN_SPARE_M: f64 = 0.005;
 
 /// Gap nodes are where the clearance is at most this much above the need,
 /// m: passages up to 0.3 m wider than the disc with its clearance (wider
@@ -178,10 +198,14 @@ fn add_gap_nodes(
     // The best ridge point of each grid cell (the cell of the grid node
     // nearest it).
     let mut best: HashMap<(i32, i32), (f64, V2)> = HashMap::new();
+    // A scan point nearest a strip of centre positions is at most h/√2
+    // from it, and the clearance changes by at most as much as the point
+    // moves: a point that low may still be next to a way.
+    let shortfall = h * std::f64::consts::FRAC_1_SQRT_2;
     for j in 1..ny.saturating_sub(1) {
         for i in 1..nx.saturating_sub(1) {
             let c = clear[j * nx + i];
-            if c < need || c > need + GAP_BAND_M {
+            if c < need - shortfall || c > need + GAP_BAND_M {
                 continue;
             }
             let ridge = [(1, 0), (0, 1), (1, 1), (1, -1)]
@@ -199,7 +223,18 @@ fn add_gap_nodes(
             if !ridge {
                 continue;
             }
-            let p = at(i, j);
+            let (c, p) = if c >= need {
+                (c, at(i, j))
+            } else {
+                // Below the need: the highest clearance within half a
+                // scan step, in finer steps.
+                let Some(best) = highest_near(world, at(i, j), h / 2.0)
+                    .filter(|b| b.0 >= need + GAP_MIN_SPARE_M)
+                else {
+                    continue;
+                };
+                best
+            };
             let cell = (
                 ((p.x - x0) / s).round() as i32,
                 ((p.y - y0) / s).round() as i32,
@@ -249,6 +284,19 @@ fn add_gap_nodes(
         }
         near.entry((ci, cj)).or_default().push((k, p));
     }
+}
+
+/// The point of highest clearance within `half` (either axis) of `p`, on a
+/// [`GAP_REFINE_M`] grid, with its clearance.
+fn highest_near(world: &World, p: V2, half: f64) -> Option<(f64, V2)> {
+    let n = (half / GAP_REFINE_M).round() as i32;
+    (-n..=n)
+        .flat_map(|j| (-n..=n).map(move |i| (i, j)))
+        .map(|(i, j)| {
+            let q = V2::new(p.x + i as f64 * GAP_REFINE_M, p.y + j as f64 * GAP_REFINE_M);
+            (world.clearance(q, 0.0), q)
+        })
+        .max_by(|a, b| a.0.total_cmp(&b.0))
 }
 
 #[cfg(test)]
@@ -319,6 +367,63 @@ points = [[1.9, 1.67], [2.1, 1.67], [2.1, 3.0], [1.9, 3.0]]
             dx >= 900 && dy.abs() <= 30
         });
         assert!(far, "the start joined to the nodes it sees");
+    }
+
+    /// The library's narrow passage: its gap is 20 mm wider than the disc
+    /// and the clearance, so the strip of centre positions that fit is 20
+    /// mm wide and lies between two rows of the 40 mm scan, each 10 mm
+    /// short of the need. The scan's near misses are searched more finely
+    /// and the gap gets its nodes (without that search: no route).
+    #[test]
+    fn a_gap_between_the_scan_points_gets_its_nodes() {
+        let sc = scenario("traps/narrow-passage.toml");
+        let map = build(&sc);
+        let n = map.nodes().len() as u16;
+        let route = map
+            .plan(n - 2, n - 1, &RouteConfig::default())
+            .expect("a route through the gap");
+        let in_gap = |p: planner_core::Point| (2_900..=3_100).contains(&p.x);
+        let through: Vec<_> = route
+            .nodes
+            .iter()
+            .map(|&k| map.nodes()[k as usize])
+            .filter(|&p| in_gap(p))
+            .collect();
+        assert!(!through.is_empty(), "no node in the gap");
+        // In the strip: within 10 mm of the gap's axis (y = 2.5 m).
+        assert!(
+            through.iter().all(|p| (p.y - 2_500).abs() <= 10),
+            "{through:?}"
+        );
+    }
+
+    /// A gap with 2 mm to spare beyond the need (a strip of centre
+    /// positions 4 mm wide, between the scan's rows): too narrow for a
+    /// rover to hit, so no node is made in it.
+    #[test]
+    fn a_gap_with_almost_nothing_to_spare_gets_no_node() {
+        let (low, high) = (1.5 - 0.142, 1.5 + 0.142);
+        let text = format!(
+            r#"
+format = 1
+name = "hair"
+bounds = [0.0, 0.0, 4.0, 3.0]
+start = [1.0, 0.8]
+goal = [3.0, 2.3]
+robot_radius = 0.1
+[[polygon]]
+points = [[1.9, 0.0], [2.1, 0.0], [2.1, {low}], [1.9, {low}]]
+[[polygon]]
+points = [[1.9, {high}], [2.1, {high}], [2.1, 3.0], [1.9, 3.0]]
+"#
+        );
+        let map = build(&Scenario::parse(&text, Path::new("hair.toml")).unwrap());
+        let in_gap: Vec<_> = map
+            .nodes()
+            .iter()
+            .filter(|p| (1_900..=2_100).contains(&p.x) && (p.y - 1_500).abs() <= 20)
+            .collect();
+        assert!(in_gap.is_empty(), "{in_gap:?}");
     }
 
     /// Every library world's graph fits, and joins start and goal where a
