@@ -869,11 +869,31 @@ mod tests {
         m
     }
 
-    fn planner(cfg: RouteConfig) -> RoutePlanner<4, 4> {
-        let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
+    /// The planner's default configuration.
+    fn config() -> Config {
+        crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
             .build()
-            .unwrap();
-        RoutePlanner::new(config, detour(), cfg, Point::new(0, 3_000))
+            .unwrap()
+    }
+
+    /// Nodes at `points`, each joined to the next by an edge of the
+    /// clearance given for it.
+    fn chain<const N: usize, const E: usize>(
+        points: &[(i16, i16)],
+        clearances_mm: &[u16],
+    ) -> RouteMap<N, E> {
+        let mut m = RouteMap::new();
+        for &(x, y) in points {
+            m.add_node(Point::new(x, y)).unwrap();
+        }
+        for (i, &c) in (0..).zip(clearances_mm) {
+            m.add_edge(i, i + 1, c).unwrap();
+        }
+        m
+    }
+
+    fn planner(cfg: RouteConfig) -> RoutePlanner<4, 4> {
+        RoutePlanner::new(config(), detour(), cfg, Point::new(0, 3_000))
     }
 
     /// Nothing in sight: each sensor at its phantom level (0.28 V).
@@ -914,22 +934,16 @@ mod tests {
     fn waypoints_in_a_row_are_one_leg() {
         // Nodes every 200 mm east, 10 mm off the line from the second
         // on, then north to the goal's node.
-        let mut m: RouteMap<8, 8> = RouteMap::new();
-        for (x, y) in [(0, 0), (200, 10), (400, 0), (600, 10), (800, 0), (800, 800)] {
-            m.add_node(Point::new(x, y)).unwrap();
-        }
-        for i in 0..5 {
-            m.add_edge(i, i + 1, 500).unwrap();
-        }
-        let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
-            .build()
-            .unwrap();
+        let m: RouteMap<8, 8> = chain(
+            &[(0, 0), (200, 10), (400, 0), (600, 10), (800, 0), (800, 800)],
+            &[500; 5],
+        );
         let goal_for = |straighten_mm| {
             let cfg = RouteConfig {
                 straighten_mm,
                 ..RouteConfig::default()
             };
-            let mut p = RoutePlanner::new(config, m.clone(), cfg, Point::new(800, 800));
+            let mut p = RoutePlanner::new(config(), m.clone(), cfg, Point::new(800, 800));
             p.step_raw(Pose::default(), &CLEAR);
             p.planner().goal()
         };
@@ -948,15 +962,8 @@ mod tests {
         // passes it when the edge on is roomy, and not when that edge has
         // 10 mm to spare beyond the disc and the clearance (a gap).
         let goal_after = |clearance_mm| {
-            let mut m: RouteMap<4, 4> = RouteMap::new();
-            for (x, y) in [(0, 0), (600, 0), (600, 600)] {
-                m.add_node(Point::new(x, y)).unwrap();
-            }
-            m.add_edge(0, 1, 500).unwrap();
-            m.add_edge(1, 2, clearance_mm).unwrap();
-            let config = crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
-                .build()
-                .unwrap();
+            let m: RouteMap<4, 4> = chain(&[(0, 0), (600, 0), (600, 600)], &[500, clearance_mm]);
+            let config = config();
             let need = config.robot_radius_mm + config.clearance_mm;
             assert_eq!(need, 140);
             let goal = Point::new(600, 600);
