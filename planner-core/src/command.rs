@@ -357,11 +357,7 @@ mod tests {
         assert_eq!(Status::from_code(4), None);
     }
 
-    fn cfg() -> Config {
-        ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-            .build()
-            .unwrap()
-    }
+    use crate::config::test_config as cfg;
 
     #[test]
     fn free_distance_by_hand() {

@@ -363,6 +363,14 @@ const fn corridor_mm(dir: Dir, half_width: u16) -> u16 {
     }
 }
 
+/// The default configuration for the AVR's ADC, for the modules' tests.
+#[cfg(test)]
+pub(crate) fn test_config() -> Config {
+    ConfigBuilder::new(crate::sensors::AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -55,8 +55,11 @@
 //! Give-up: when `give_up_drops` virtual obstacles have been dropped, or
 //! `give_up_steps` cycles have passed, since the rover last came
 //! `progress_mm` nearer the goal than ever before, escape is making no
-//! progress and the goal is reported unreachable (a walled-in goal never
-//! lets the best distance improve).
+//! progress (a walled-in goal never lets the best distance improve). With
+//! `follow` set (the default) the planner then follows boundaries (the
+//! `follow` module), which reports a walled-in goal unreachable when it
+//! has been all round; without it the goal is reported unreachable at
+//! once.
 
 use crate::fixed::{
     box_within, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
@@ -120,6 +123,9 @@ pub struct EscapeConfig {
     /// How much longer such a step may be for each virtual obstacle
     /// dropped since the last progress, mm (0 ..= 5000).
     pub retreat_per_drop_mm: u16,
+    /// Whether a give-up hands over to boundary following (the `follow`
+    /// module) instead of reporting the goal unreachable at once.
+    pub follow: bool,
 }
 
 impl Default for EscapeConfig {
@@ -144,6 +150,7 @@ impl EscapeConfig {
         give_up_steps: 400,
         retreat_mm: RETREAT_MM,
         retreat_per_drop_mm: RETREAT_PER_DROP_MM,
+        follow: true,
     };
 
     /// Whether every field is in its documented range.

@@ -161,11 +161,7 @@ mod tests {
     use crate::config::ConfigBuilder;
     use crate::sensors::AdcProfile;
 
-    fn cfg() -> Config {
-        ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-            .build()
-            .unwrap()
-    }
+    use crate::config::test_config as cfg;
 
     #[test]
     fn collision_point_conditions_by_hand() {

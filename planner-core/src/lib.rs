@@ -32,8 +32,9 @@
 //! Modules, one per concept of the papers: [`apf`] (the classical
 //! baseline), [`fixed`] (the fixed-point
 //! formats), [`sensors`], [`forces`], [`memory`] (remembered collision
-//! points), [`escape`] (virtual obstacles), [`command`] (output and the
-//! safety rule), [`config`]; [`liquid`] (the liquid-movement planner over a
+//! points), [`escape`] (virtual obstacles), [`follow`] (boundary following
+//! once the escape gives up), [`command`] (output and the safety rule),
+//! [`config`]; [`liquid`] (the liquid-movement planner over a
 //! known map), [`route`] (the Dijkstra + potential-field route layer over a
 //! known map's waypoint graph); [`drive`] (odometry and the turn-then-advance
 //! executor the firmwares share), [`protocol`] (their serial command lines).
@@ -51,6 +52,7 @@ pub mod config;
 pub mod drive;
 pub mod escape;
 pub mod fixed;
+pub mod follow;
 pub mod forces;
 pub mod liquid;
 pub mod memory;
@@ -68,6 +70,7 @@ pub use sensors::{
 };
 
 use fixed::{box_within, hypot};
+use follow::FollowVerdict;
 use forces::Motion;
 
 /// Beyond this angle from the rover's heading a force counts as "behind"
@@ -148,6 +151,8 @@ pub struct Planner {
     config: Config,
     memory: memory::Memory,
     escape: escape::Escape,
+    /// Boundary following after the escape gave up (see `follow`).
+    follow: follow::Follow,
 }
 
 // The fields before the fold-back filter are the ones the step reads and
@@ -165,6 +170,7 @@ impl Planner {
             goal,
             memory: memory::Memory::new(),
             escape: escape::Escape::new(),
+            follow: follow::Follow::default(),
             fold_back: sensors::FoldBackFilter::default(),
             following: false,
             turn_side: 0,
@@ -191,6 +197,7 @@ impl Planner {
         self.goal = goal;
         self.memory = memory::Memory::new();
         self.escape = escape::Escape::new();
+        self.follow = follow::Follow::default();
         self.fold_back = sensors::FoldBackFilter::default();
         self.following = false;
         self.turn_side = 0;
@@ -301,9 +308,41 @@ impl Planner {
         if self.unreachable {
             return stop(Status::Unreachable);
         }
-        if self.escape.observe(&self.config.escape, robot, goal_mm) == Verdict::GiveUp {
-            self.unreachable = true;
-            return stop(Status::Unreachable);
+        // Ours: once the escape gives up, boundary following (the `follow`
+        // module) instead of reporting the goal unreachable at once; the
+        // potential field is not used again for this goal.
+        if !self.follow.active()
+            && self.escape.observe(&self.config.escape, robot, goal_mm) == Verdict::GiveUp
+        {
+            if !self.config.escape.follow {
+                self.unreachable = true;
+                return stop(Status::Unreachable);
+            }
+            self.follow.start();
+        }
+        if self.follow.active() {
+            let bearing_rel = bearing.sub(pose.heading);
+            let in_sector = bearing_rel.abs_signed() <= self.config.sector_half_width().0;
+            let free_to_goal = if in_sector {
+                let flank = self.flank_at(pose);
+                command::free_way_mm(&self.config, readings, flank, bearing_rel)
+            } else {
+                0
+            };
+            return match self.follow.decide(
+                &self.config,
+                readings,
+                robot,
+                goal_mm,
+                bearing_rel,
+                free_to_goal,
+            ) {
+                FollowVerdict::Off | FollowVerdict::GiveUp => {
+                    self.unreachable = true;
+                    stop(Status::Unreachable)
+                }
+                v => self.follow_step(pose, v, free_to_goal, stopped),
+            };
         }
         let cfg = &self.config;
         let near = goal_mm < cfg.sensor_range_mm;
@@ -479,15 +518,72 @@ impl Planner {
                 step = ahead;
             }
         }
-        self.stepped_from = if step > 0 { robot } else { NOWHERE };
-        self.flank.start(heading, step);
+        self.command(robot, heading, step)
+    }
+
+    /// The cycle's command: a step of `step_mm` along `heading` from
+    /// `robot` (the pocket rule's `stepped_from`, the guard's flank
+    /// started with it).
+    fn command(&mut self, robot: Point, heading: Angle, step_mm: u16) -> Output {
+        self.stepped_from = if step_mm > 0 { robot } else { NOWHERE };
+        self.flank.start(heading, step_mm);
         Output {
-            command: Command {
-                heading,
-                step_mm: step,
-            },
+            command: Command { heading, step_mm },
             status: Status::Moving,
         }
+    }
+
+    /// A step of boundary following: seeking, towards the goal as far as
+    /// the way is free (`free_to_goal_mm`); following, the first of the
+    /// follower's turns whose way is free for [`follow::FOLLOW_FREE_MM`],
+    /// or in a tight spot where none is, straight on. Never beyond the
+    /// safety rule's free way; where that is nothing, a turn on the spot
+    /// away from the boundary.
+    fn follow_step(
+        &mut self,
+        pose: Pose,
+        verdict: FollowVerdict,
+        free_to_goal_mm: u16,
+        stopped: bool,
+    ) -> Output {
+        let cfg = &self.config;
+        let most = follow::FOLLOW_STEP_MM;
+        let flank = self.flank_at(pose);
+        let free = |turn| command::free_way_mm(cfg, &self.last_readings, flank, turn);
+        let (turn, step) = match verdict {
+            FollowVerdict::Seek(turn, most) => (turn, free_to_goal_mm.min(most)),
+            _ => {
+                // The first turn free for `FOLLOW_FREE_MM`; in a tight spot
+                // where none is (or where the guard stopped the last step
+                // before it began: the planner's view of a turned heading
+                // and the guard's view after the turn differ), straight on
+                // as far as free, which is what the guard checks; else a
+                // turn on the spot away from the boundary, the same way
+                // each time, until a way opens.
+                let found = if stopped {
+                    None
+                } else {
+                    self.follow
+                        .turns(cfg)
+                        .into_iter()
+                        .map(|turn| (turn, free(turn)))
+                        .find(|&(_, way)| way >= follow::FOLLOW_FREE_MM)
+                };
+                let (turn, way) = found.unwrap_or((Angle::ZERO, free(Angle::ZERO)));
+                if way.min(most) < cfg.min_step_mm {
+                    (self.follow.away_turn(cfg), 0)
+                } else {
+                    (turn, way.min(most))
+                }
+            }
+        };
+        self.command(pose.position, pose.heading.add(turn), step)
+    }
+
+    /// The guard's flank points as the safety rule takes them at `pose`.
+    fn flank_at(&self, pose: Pose) -> Option<(Point, Dir, &[Point])> {
+        let flank = self.flank.points();
+        (!flank.is_empty()).then(|| (pose.position, Dir::of(pose.heading), flank))
     }
 
     /// The guard the executor calls during an advance with fresh raw counts
@@ -512,6 +608,11 @@ impl Planner {
     /// The escape state (virtual obstacles).
     pub fn escape(&self) -> &escape::Escape {
         &self.escape
+    }
+
+    /// The boundary follower's state.
+    pub fn follow(&self) -> &follow::Follow {
+        &self.follow
     }
 
     /// The collision points of the last cycle, world mm (feature `report`).
@@ -967,6 +1068,39 @@ mod tests {
         );
         p.set_goal(Point::new(0, 3_000));
         assert_eq!(p.step_raw(at(0, 0, 90), &[FAR; 5]).status, Status::Moving);
+    }
+
+    #[test]
+    fn after_the_escape_gives_up_the_rover_follows_instead() {
+        // Held on one spot: no progress, so the escape gives up after its
+        // budget of 10 cycles. Without boundary following that is
+        // "unreachable"; with it the rover seeks the goal (straight ahead,
+        // the way free) and the potential field is not asked again.
+        let run = |follow| {
+            let escape = EscapeConfig {
+                give_up_steps: 10,
+                follow,
+                ..EscapeConfig::default()
+            };
+            let mut p = planner_with(escape, Point::new(3_000, 0));
+            let outs: Vec<Output> = (0..20)
+                .map(|_| p.step_raw(at(0, 0, 0), &[FAR; 5]))
+                .collect();
+            (outs, p.follow().active())
+        };
+        let (off, following) = run(false);
+        assert!(!following);
+        let gave_up = off
+            .iter()
+            .position(|o| o.status == Status::Unreachable)
+            .expect("gave up");
+        let (on, following) = run(true);
+        assert!(following);
+        for o in &on[gave_up..] {
+            assert_eq!(o.status, Status::Moving);
+            assert_eq!(o.command.heading, Angle::ZERO);
+            assert_eq!(o.command.step_mm, follow::FOLLOW_STEP_MM);
+        }
     }
 
     proptest::proptest! {

@@ -94,10 +94,14 @@ pub fn to_rad(a: Angle) -> f64 {
 pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
 
 /// The escape each sensing planner runs with: on (the defaults, the
-/// retreat limit included) for `eapf`, off otherwise.
+/// retreat limit and boundary following included) for `eapf`, on without
+/// boundary following for `route`, off otherwise.
 fn escape_config(kind: PlannerKind) -> EscapeConfig {
     EscapeConfig {
         enabled: matches!(kind, PlannerKind::Eapf | PlannerKind::Route),
+        // With the map, a leg given up is blocked and the route planned
+        // again: a better last resort than following a boundary.
+        follow: kind == PlannerKind::Eapf,
         ..EscapeConfig::default()
     }
 }
@@ -190,6 +194,13 @@ impl SimPlanner {
         g == planner_core::Guard::Continue
     }
 
+    /// Whether the core follows a boundary (or seeks one), and where it
+    /// met the last one (planner `eapf`; `SIM_DEBUG` prints it).
+    pub fn follow_state(&self) -> Option<(bool, Option<V2>)> {
+        self.eapf()
+            .map(|p| (p.follow().active(), p.follow().hit().map(to_v2)))
+    }
+
     /// Collision points of the last cycle, m.
     pub fn last_collision_points(&self) -> Vec<V2> {
         match self.eapf() {
@@ -255,7 +266,16 @@ mod tests {
             (eapf.retreat_mm, eapf.retreat_per_drop_mm),
             (escape::RETREAT_MM, escape::RETREAT_PER_DROP_MM)
         );
-        assert_eq!(escape_config(PlannerKind::Route), eapf);
+        // The route layer's last resort is its own (block the leg, plan
+        // again), not boundary following.
+        let route = escape_config(PlannerKind::Route);
+        assert_eq!(
+            route,
+            EscapeConfig {
+                follow: false,
+                ..eapf
+            }
+        );
         assert!(!escape_config(PlannerKind::EapfPlain).enabled);
         assert!(!escape_config(PlannerKind::Apf).enabled);
     }

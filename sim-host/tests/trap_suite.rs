@@ -159,3 +159,33 @@ fn the_route_layer_drives_the_narrow_passage() {
         assert!(ratio <= 1.5, "seed {seed}: {ratio:.2}× the reference");
     }
 }
+
+/// Boundary following once the escape gives up (planner-core's `follow`
+/// module). gen-144 is a world `gen` writes for seed 144 (the paper's
+/// environment 2 parameters; no rule was tuned on it): there the escape
+/// worked round a cluster of circles for its whole budget and reported the
+/// goal unreachable (seed 1, before the follower); following the cluster's
+/// boundary the rover reaches it. The walled-in goal is still reported
+/// unreachable: the follower goes round its wall and closes the loop.
+#[test]
+fn the_boundary_follower_reaches_a_goal_the_escape_gave_up_on() {
+    use sim_host::generate::RandomWorld;
+    let dir = std::env::temp_dir().join(format!("follow-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("gen-144.toml");
+    let world = RandomWorld::paper_env2("gen-144", [6.0, 7.3], [12.7, 9.75], 144);
+    std::fs::write(&file, world.to_toml("gen --seed 144")).unwrap();
+    let rows = run_all(&[file], &SimConfig::default(), false).unwrap();
+    std::fs::remove_dir_all(&dir).unwrap();
+    assert_eq!(rows[0].outcome, Outcome::Reached, "{:?}", rows[0]);
+
+    let walled = library_files(&["traps/walled-in.toml"]);
+    for seed in 1..=3 {
+        let cfg = SimConfig {
+            seed,
+            ..SimConfig::default()
+        };
+        let rows = run_all(&walled, &cfg, false).unwrap();
+        assert_eq!(rows[0].outcome, Outcome::Unreachable, "seed {seed}");
+    }
+}

@@ -1,0 +1,433 @@
+//! Boundary following: the escape's last resort (ours, the DistBug
+//! algorithm of Kamon & Rivlin, of Lumelsky & Stepanov's Bug family; not
+//! in the seed papers).
+//!
+//! The virtual obstacles fill a pit until the rover spills out of it, but
+//! in a cluster of large obstacles the rover can work along the cluster's
+//! face for the whole give-up budget while the way lies round its far side
+//! (docs/bench.md, "Worlds no rule was tuned on"). Giving up there reports
+//! a reachable goal unreachable. Instead, once the escape gives up, the
+//! rover goes on as DistBug does, and the potential field is not used
+//! again for this goal:
+//!
+//! * **seek**: head for the goal (turning on the spot first when its
+//!   bearing is outside the sensed sector) while the way there is free for
+//!   [`FOLLOW_FREE_MM`]; where it is not, is the *hit point*;
+//! * **follow**: keep the boundary on one side: of the sensors' headings
+//!   from that side's edge of the sector to the other's, take the first
+//!   whose way is free for [`FOLLOW_FREE_MM`] (the rover turns towards the
+//!   boundary until the way there is blocked that near); the side is the
+//!   one whose opening, as the beams see it at the first hit, is nearer the
+//!   goal's bearing (TangentBug's choice of the boundary's nearer end), and
+//!   is kept for the goal, as a Bug algorithm keeps it;
+//! * **leave** (DistBug's rule) where the way towards the goal is free far
+//!   enough to end `progress_mm` nearer the goal than the nearest the rover
+//!   has been since the hit: seek again. A boundary out of sight for
+//!   [`LOST_CYCLES`] is left too. Meeting a boundary again no
+//!   `progress_mm` nearer than that nearest, the rover follows on from the
+//!   same hit point (the same boundary, so that its loop can close);
+//! * **unreachable** when the rover comes back within `2·revisit_mm` of
+//!   the hit point after having been more than `4·revisit_mm` away from it
+//!   (the track round a boundary passes the hit point at the follower's
+//!   distance, not the seek's): it has been all round the boundary without
+//!   finding a way off it nearer the goal (the Bug family's argument: a
+//!   boundary that encloses the goal or the rover has no such point), or
+//!   when `2·give_up_steps` cycles pass since the hit (a safety net for a
+//!   loop the test misses).
+//!
+//! A new hit point is `progress_mm` nearer the goal than the nearest before
+//! it, so the hits cannot go on for ever. The step's length is the safety
+//! rule's (never beyond what the readings and the guard's flank points show
+//! free), so following adds no way to collide.
+
+use crate::config::Config;
+use crate::fixed::{within, Angle, Point};
+use crate::sensors::{Reading, Readings, SENSOR_COUNT};
+
+/// A heading is taken while seeking or following if its way is free this
+/// far, mm.
+pub const FOLLOW_FREE_MM: u16 = 250;
+/// The longest step while seeking or following, mm: short enough that a
+/// corner does not go by unseen.
+pub const FOLLOW_STEP_MM: u16 = 200;
+/// Something this near a sensor face (mm) is in sight of the follower.
+pub const SIGHT_MM: u16 = 300;
+/// Cycles in a row with nothing in sight after which the boundary is lost:
+/// more than the turns to the sector's edge that bring a convex corner back
+/// into sight.
+pub const LOST_CYCLES: u8 = 4;
+
+/// What the boundary follower decided this cycle.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum FollowVerdict {
+    /// Not following.
+    Off,
+    /// All round the boundary, or the budget spent: the goal is
+    /// unreachable.
+    GiveUp,
+    /// Seek: turn by this (relative to the heading) and step at most this
+    /// far, mm (0: turn on the spot).
+    Seek(Angle, u16),
+    /// Follow: the first free of [`Follow::turns`].
+    Hug,
+}
+
+/// The boundary follower's state.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Follow {
+    /// +1: the boundary kept on the left, −1: on the right, 0: off.
+    side: i8,
+    /// Whether the rover has been more than `4·revisit_mm` from the hit
+    /// point.
+    away: bool,
+    /// Cycles in a row with nothing in sight while following.
+    lost: u8,
+    /// Cycles since the last new hit point (since the start before it).
+    cycles: u16,
+    /// The nearest the rover has been to the goal since the hit, mm.
+    nearest_mm: u16,
+    /// Where the boundary followed was met (`None` before the first).
+    hit: Option<Point>,
+    /// Seeking (the goal), not following.
+    seeking: bool,
+}
+
+impl Follow {
+    /// Whether the rover seeks or follows a boundary (the escape gave up).
+    pub fn active(&self) -> bool {
+        self.side != 0
+    }
+
+    /// Whether a boundary is being followed (met, not only sought).
+    pub fn following(&self) -> bool {
+        self.side != 0 && !self.seeking
+    }
+
+    /// Where the boundary followed last was met.
+    pub fn hit(&self) -> Option<Point> {
+        self.hit
+    }
+
+    /// Start: seek first.
+    pub fn start(&mut self) {
+        *self = Follow {
+            side: 1,
+            seeking: true,
+            ..Follow::default()
+        };
+    }
+
+    /// A turn to the sector's edge away from the boundary's side (what a
+    /// blocked way calls for).
+    pub fn away_turn(&self, cfg: &Config) -> Angle {
+        let half = cfg.sector_half_width();
+        if self.side > 0 {
+            half.neg()
+        } else {
+            half
+        }
+    }
+
+    /// One cycle at `robot`, `goal_mm` from the goal whose bearing is
+    /// `bearing_rel` off the heading, the way towards it free for
+    /// `free_to_goal_mm` (0 outside the sensed sector).
+    pub fn decide(
+        &mut self,
+        cfg: &Config,
+        readings: &Readings,
+        robot: Point,
+        goal_mm: u16,
+        bearing_rel: Angle,
+        free_to_goal_mm: u16,
+    ) -> FollowVerdict {
+        if self.side == 0 {
+            return FollowVerdict::Off;
+        }
+        let esc = &cfg.escape;
+        let half = cfg.sector_half_width();
+        let in_sector = bearing_rel.abs_signed() <= half.0;
+        self.cycles = self.cycles.saturating_add(1);
+        if self.cycles > esc.give_up_steps.saturating_mul(2) {
+            self.side = 0;
+            return FollowVerdict::GiveUp;
+        }
+        if let (false, Some(hit)) = (self.seeking, self.hit) {
+            // DistBug's leave: the way towards the goal is free (as far as
+            // seeking asks) and ends nearer than the nearest since the hit.
+            let nearest = self.nearest_mm.min(goal_mm);
+            let ends_at = goal_mm.saturating_sub(free_to_goal_mm);
+            let leave = in_sector
+                && free_to_goal_mm >= FOLLOW_FREE_MM.min(goal_mm)
+                && ends_at.saturating_add(esc.progress_mm) <= nearest;
+            // A boundary out of sight for several turns towards it is
+            // lost (a small obstacle left behind; the circle would close
+            // a false loop): seek again.
+            let seen = readings
+                .iter()
+                .any(|&r| nearness_mm(r).is_some_and(|d| d <= SIGHT_MM));
+            self.lost = if seen { 0 } else { self.lost.saturating_add(1) };
+            if leave || self.lost >= LOST_CYCLES {
+                self.seeking = true;
+                self.lost = 0;
+            } else {
+                // The nearest counts where the boundary was followed from
+                // (a seek from here compares with what came before).
+                self.nearest_mm = nearest;
+                // The track round a boundary passes its hit point at the
+                // follower's distance, not the seek's: "back" is twice
+                // `revisit_mm`, "away" four times.
+                let back = esc.revisit_mm.saturating_mul(2);
+                if !self.away {
+                    self.away = !within(hit, robot, back.saturating_mul(2));
+                } else if within(hit, robot, back) {
+                    self.side = 0;
+                    return FollowVerdict::GiveUp;
+                }
+                return FollowVerdict::Hug;
+            }
+        }
+        // Seeking.
+        if !in_sector {
+            return FollowVerdict::Seek(clamp(bearing_rel, half), 0);
+        }
+        if free_to_goal_mm >= FOLLOW_FREE_MM.min(goal_mm) {
+            // No farther than the goal.
+            return FollowVerdict::Seek(bearing_rel, FOLLOW_STEP_MM.min(goal_mm));
+        }
+        // The way to the goal is blocked. Not `progress_mm` nearer than
+        // the nearest on the boundary followed before: the same boundary
+        // (the leave promised more than the seek could make, or a corner
+        // went out of sight), followed on from the same hit point, so that
+        // its loop can close. Else a new hit point.
+        self.seeking = false;
+        if self.hit.is_some() && goal_mm.saturating_add(esc.progress_mm) > self.nearest_mm {
+            return FollowVerdict::Hug;
+        }
+        // The side is chosen at the first hit and kept (a Bug algorithm
+        // goes round every boundary the same way: choosing again at each
+        // hit, the rover went back and forth between two).
+        if self.hit.is_none() {
+            self.side = side_of(readings, bearing_rel);
+        }
+        self.hit = Some(robot);
+        self.away = false;
+        self.lost = 0;
+        self.cycles = 0;
+        self.nearest_mm = goal_mm;
+        FollowVerdict::Hug
+    }
+
+    /// The turns to try while following, the boundary's side first: the
+    /// sensors' angles from that side's edge of the sector to the other's.
+    pub fn turns(&self, cfg: &Config) -> [Angle; SENSOR_COUNT] {
+        let mut a = cfg.sensor_angles;
+        if self.side > 0 {
+            a.reverse();
+        }
+        a
+    }
+}
+
+/// The side to keep the boundary on, met with the goal `bearing_rel` off
+/// the heading: the way round is by the opening (the first beam from the
+/// middle out that sees nothing within [`SIGHT_MM`]) nearer the middle,
+/// as TangentBug takes the boundary's end nearer the goal; on a tie, the
+/// goal's side. Round by the left keeps the boundary on the right (−1).
+fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
+    let open = |i: usize| nearness_mm(readings[i]).is_none_or(|d| d > SIGHT_MM);
+    // Beam steps from the middle to the first opening on each side (3:
+    // none in sight).
+    let left = (2..SENSOR_COUNT).position(open).unwrap_or(3);
+    let right = (0..=2).rev().position(open).unwrap_or(3);
+    let by_left = match left.cmp(&right) {
+        core::cmp::Ordering::Less => true,
+        core::cmp::Ordering::Greater => false,
+        core::cmp::Ordering::Equal => bearing_rel.signed() >= 0,
+    };
+    if by_left {
+        -1
+    } else {
+        1
+    }
+}
+
+/// How near a reading puts an obstacle (mm from the sensor face), if any.
+fn nearness_mm(r: Reading) -> Option<u16> {
+    match r {
+        Reading::Range(mm) => Some(mm),
+        Reading::TooClose => Some(0),
+        Reading::Clear | Reading::Implausible => None,
+    }
+}
+
+/// `a` clamped to ±`half`.
+fn clamp(a: Angle, half: Angle) -> Angle {
+    if a.abs_signed() <= half.0 {
+        a
+    } else if a.signed() > 0 {
+        half
+    } else {
+        half.neg()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    use crate::config::test_config as cfg;
+
+    const CLEAR: Readings = [Reading::Clear; SENSOR_COUNT];
+    /// Something 150 mm off the left beams' faces, nothing on the right.
+    const WALL_LEFT: Readings = [
+        Reading::Clear,
+        Reading::Clear,
+        Reading::Range(150),
+        Reading::Range(150),
+        Reading::Range(150),
+    ];
+    const P0: Point = Point::new(0, 0);
+
+    /// A follower that met a boundary at `P0`, 3,000 mm from the goal,
+    /// with the opening on the right (so the boundary is kept on the left).
+    fn following() -> (Config, Follow) {
+        let cfg = cfg();
+        let mut f = Follow::default();
+        f.start();
+        let v = f.decide(&cfg, &WALL_LEFT, P0, 3_000, Angle::ZERO, 100);
+        assert_eq!(v, FollowVerdict::Hug);
+        assert!(f.following());
+        (cfg, f)
+    }
+
+    #[test]
+    fn off_until_started() {
+        let mut f = Follow::default();
+        let v = f.decide(&cfg(), &CLEAR, P0, 3_000, Angle::ZERO, 760);
+        assert_eq!(v, FollowVerdict::Off);
+        assert!(!f.active());
+    }
+
+    #[test]
+    fn seeks_the_goal_while_its_way_is_free() {
+        let cfg = cfg();
+        let mut f = Follow::default();
+        f.start();
+        let ten = Angle::from_deg(10);
+        assert_eq!(
+            f.decide(&cfg, &CLEAR, P0, 3_000, ten, 760),
+            FollowVerdict::Seek(ten, FOLLOW_STEP_MM)
+        );
+        // Never past the goal.
+        assert_eq!(
+            f.decide(&cfg, &CLEAR, P0, 120, ten, 760),
+            FollowVerdict::Seek(ten, 120)
+        );
+        // Outside the sector: a turn on the spot to its edge first.
+        let v = f.decide(&cfg, &CLEAR, P0, 3_000, Angle::from_deg(90), 0);
+        assert_eq!(v, FollowVerdict::Seek(cfg.sector_half_width(), 0));
+        assert!(!f.following());
+    }
+
+    #[test]
+    fn the_opening_nearer_the_middle_picks_the_side() {
+        let (cfg, f) = following();
+        // Open on the right: round by the right, the boundary on the left,
+        // so the left edge of the sector is tried first.
+        assert_eq!(f.turns(&cfg)[0], cfg.sensor_angles[SENSOR_COUNT - 1]);
+        assert_eq!(f.away_turn(&cfg), cfg.sector_half_width().neg());
+        let mirrored = [
+            WALL_LEFT[4],
+            WALL_LEFT[3],
+            WALL_LEFT[2],
+            WALL_LEFT[1],
+            WALL_LEFT[0],
+        ];
+        let mut g = Follow::default();
+        g.start();
+        g.decide(&cfg, &mirrored, P0, 3_000, Angle::ZERO, 100);
+        assert_eq!(g.turns(&cfg)[0], cfg.sensor_angles[0]);
+        assert_eq!(
+            side_of(&CLEAR, Angle::from_deg(5)),
+            -1,
+            "a tie: the goal's side"
+        );
+        assert_eq!(side_of(&CLEAR, Angle::from_deg(-5)), 1);
+    }
+
+    #[test]
+    fn leaves_where_the_way_to_the_goal_ends_nearer() {
+        let (cfg, mut f) = following();
+        let at = Point::new(0, 300);
+        // Free for 150 mm: it would end 2,850 mm off, not 100 nearer than
+        // the 2,950 the rover has come to. Follow on.
+        let v = f.decide(&cfg, &WALL_LEFT, at, 2_950, Angle::ZERO, 150);
+        assert_eq!(v, FollowVerdict::Hug);
+        // Free for 300 mm, ending at 2,650: leave, and seek.
+        let v = f.decide(&cfg, &WALL_LEFT, at, 2_950, Angle::ZERO, 300);
+        assert_eq!(v, FollowVerdict::Seek(Angle::ZERO, FOLLOW_STEP_MM));
+        assert!(f.active() && !f.following());
+    }
+
+    #[test]
+    fn a_loop_round_the_boundary_reports_unreachable() {
+        let (cfg, mut f) = following();
+        // Round a square of 2 m, the boundary in sight, the goal's way
+        // never free, never nearer.
+        let track = [(700, 0), (2_000, 0), (2_000, 2_000), (0, 2_000), (0, 700)];
+        for (x, y) in track {
+            let v = f.decide(&cfg, &WALL_LEFT, Point::new(x, y), 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug, "at ({x}, {y})");
+        }
+        let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, 250), 3_000, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::GiveUp);
+        assert!(!f.active());
+    }
+
+    #[test]
+    fn near_the_hit_point_before_going_away_is_no_loop() {
+        let (cfg, mut f) = following();
+        for y in [100, 200, 300, 200, 100, 0] {
+            let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, y), 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug);
+        }
+    }
+
+    #[test]
+    fn a_boundary_out_of_sight_is_lost_and_met_again() {
+        let (cfg, mut f) = following();
+        let at = Point::new(900, 0);
+        for _ in 1..LOST_CYCLES {
+            let v = f.decide(&cfg, &CLEAR, at, 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug);
+        }
+        // Lost: seek. The way to the goal blocked, no nearer: the same
+        // boundary, from the same hit point.
+        let v = f.decide(&cfg, &CLEAR, at, 3_000, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::Hug);
+        assert_eq!(f.hit(), Some(P0));
+        // Lost again, and blocked 100 mm nearer than ever: a new hit point.
+        for _ in 1..LOST_CYCLES {
+            f.decide(&cfg, &CLEAR, at, 3_000, Angle::ZERO, 0);
+        }
+        let near = Point::new(900, 100);
+        let v = f.decide(&cfg, &CLEAR, near, 2_900, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::Hug);
+        assert_eq!(f.hit(), Some(near));
+    }
+
+    #[test]
+    fn the_budget_ends_a_boundary_that_never_closes() {
+        let (cfg, mut f) = following();
+        let budget = cfg.escape.give_up_steps * 2;
+        let mut verdicts = (1..=budget).map(|i| {
+            let x = 700 + (i % 2) as i16 * 10;
+            f.decide(&cfg, &WALL_LEFT, Point::new(x, 0), 3_000, Angle::ZERO, 0)
+        });
+        assert!(verdicts.all(|v| v == FollowVerdict::Hug));
+        let v = f.decide(&cfg, &WALL_LEFT, Point::new(700, 0), 3_000, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::GiveUp);
+    }
+}
