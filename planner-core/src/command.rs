@@ -31,8 +31,11 @@ pub enum Status {
     Moving,
     /// Within the goal tolerance; the step is zero.
     Arrived,
-    /// Escape made no progress within its budget: stop, the goal cannot be
-    /// reached. The step is zero.
+    /// Escape made no progress within its budget and boundary following
+    /// (`follow`) went all round the boundary, or ran out of its budget,
+    /// without a way nearer the goal (or escape alone gave up, with
+    /// `EscapeConfig::follow` off): stop, the goal cannot be reached. The
+    /// step is zero.
     Unreachable,
     /// A sensor gave a reading it cannot produce: stop (the step is zero).
     SensorFault,

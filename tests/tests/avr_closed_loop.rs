@@ -81,8 +81,9 @@ fn an_unplugged_side_sensor_stops_the_rover() {
     unplugged_sensor_stops_the_rover(0, 5.5);
 }
 
-/// A goal inside a closed wall: the firmware gives up (`unreachable`, the
-/// core's give-up budget) without touching the wall, and stops its motors.
+/// A goal inside a closed wall: the firmware gives up (`unreachable`: the
+/// core's escape gives up, and its boundary follower goes round the wall and
+/// closes the loop) without touching the wall, and stops its motors.
 #[test]
 fn a_walled_in_goal_is_reported_unreachable() {
     let sc = scenario("traps/walled-in.toml");
