@@ -236,11 +236,13 @@ impl Follow {
 /// as TangentBug takes the boundary's end nearer the goal; on a tie, the
 /// goal's side. Round by the left keeps the boundary on the right (−1).
 fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
-    let open = |i: usize| nearness_mm(readings[i]).is_none_or(|d| d > SIGHT_MM);
+    let open = |r: &Reading| nearness_mm(*r).is_none_or(|d| d > SIGHT_MM);
     // Beam steps from the middle to the first opening on each side (3:
-    // none in sight).
-    let left = (2..SENSOR_COUNT).position(open).unwrap_or(3);
-    let right = (0..=2).rev().position(open).unwrap_or(3);
+    // none in sight). Iterators over the halves, not indices: the AVR
+    // image must hold no bounds-check panic (`firmware_has_no_panicking_paths`).
+    let [r0, r1, mid, l1, l0] = readings;
+    let left = [mid, l1, l0].into_iter().position(open).unwrap_or(3);
+    let right = [mid, r1, r0].into_iter().position(open).unwrap_or(3);
     let by_left = match left.cmp(&right) {
         core::cmp::Ordering::Less => true,
         core::cmp::Ordering::Greater => false,
