@@ -869,12 +869,7 @@ mod tests {
         m
     }
 
-    /// The planner's default configuration.
-    fn config() -> Config {
-        crate::ConfigBuilder::new(crate::AdcProfile::AVR_10BIT_5V)
-            .build()
-            .unwrap()
-    }
+    use crate::config::test_config as config;
 
     /// Nodes at `points`, each joined to the next by an edge of the
     /// clearance given for it.
