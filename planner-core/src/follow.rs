@@ -166,7 +166,7 @@ impl Follow {
             // a false loop): seek again.
             let seen = readings
                 .iter()
-                .any(|&r| nearness_mm(r).is_some_and(|d| d <= SIGHT_MM));
+                .any(|&r| r.obstacle_mm().is_some_and(|d| d <= SIGHT_MM));
             self.lost = if seen { 0 } else { self.lost.saturating_add(1) };
             if leave || self.lost >= LOST_CYCLES {
                 self.seeking = true;
@@ -236,7 +236,7 @@ impl Follow {
 /// as TangentBug takes the boundary's end nearer the goal; on a tie, the
 /// goal's side. Round by the left keeps the boundary on the right (−1).
 fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
-    let open = |r: &Reading| nearness_mm(*r).is_none_or(|d| d > SIGHT_MM);
+    let open = |r: &Reading| r.obstacle_mm().is_none_or(|d| d > SIGHT_MM);
     // Beam steps from the middle to the first opening on each side (3:
     // none in sight). Iterators over the halves, not indices: the AVR
     // image must hold no bounds-check panic (`firmware_has_no_panicking_paths`).
@@ -252,15 +252,6 @@ fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
         -1
     } else {
         1
-    }
-}
-
-/// How near a reading puts an obstacle (mm from the sensor face), if any.
-fn nearness_mm(r: Reading) -> Option<u16> {
-    match r {
-        Reading::Range(mm) => Some(mm),
-        Reading::TooClose => Some(0),
-        Reading::Clear | Reading::Implausible => None,
     }
 }
 

@@ -24,11 +24,7 @@ pub struct CollisionPoint {
 /// `None` for "clear" and for a reading that is not trusted as an obstacle
 /// position. "Too close" is an obstacle at the sensor face.
 pub fn obstacle_distance_mm(cfg: &Config, r: Reading) -> Option<u16> {
-    match r {
-        Reading::Range(mm) => Some(cfg.sensor_offset_mm.saturating_add(mm)),
-        Reading::TooClose => Some(cfg.sensor_offset_mm),
-        Reading::Clear | Reading::Implausible => None,
-    }
+    Some(cfg.sensor_offset_mm.saturating_add(r.obstacle_mm()?))
 }
 
 /// Collision points (eqs. 7, 8): a detection at distance `D` from the centre
