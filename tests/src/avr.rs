@@ -247,6 +247,11 @@ pub struct LoopRun {
     /// that follow it from 2 ms on: the PWM samples that were high (0: the
     /// motors stayed off), and how far the rover moved, m.
     pub after_stop: Option<(u32, f64)>,
+    /// After a stop, the firmware's painted stack peak over the whole
+    /// drive, bytes (its `M` reply): the closed loop reaches code paths
+    /// the replayed traces do not (the boundary follower, the sensor
+    /// fault), and their stack must fit the 2 KB of RAM too.
+    pub stack_peak: Option<u32>,
 }
 
 /// Run the firmware for one millisecond, sampling its PWM pins every 16 µs:
@@ -409,6 +414,10 @@ pub fn drive_with(
         }
         (high, p.dist(stopped_at))
     });
+    let stack_peak = after_stop.and_then(|_| {
+        a.request("M")
+            .and_then(|l| l.strip_prefix("M stack_peak=").and_then(|v| v.parse().ok()))
+    });
     LoopRun {
         outcome,
         seconds: t,
@@ -416,5 +425,6 @@ pub fn drive_with(
         steps,
         to_goal_m: p.dist(goal),
         after_stop,
+        stack_peak,
     }
 }

@@ -2,7 +2,7 @@
 //! worlds and sensors on its ADC pins, its motor pins and encoder inputs
 //! closing the loop (see `rover_tests::avr::drive`).
 
-use rover_tests::avr::{drive, drive_with, LoopOutcome, LoopRun, Unplug};
+use rover_tests::avr::{drive, drive_with, elf_size, firmware_elf, LoopOutcome, LoopRun, Unplug};
 use rover_tests::scenario;
 
 fn reaches(rel: &str) {
@@ -35,11 +35,22 @@ fn reaches(rel: &str) {
 }
 
 /// After the line that says why it stopped, the firmware keeps its motors
-/// off: no PWM pulse in the next 100 ms, and the rover does not move.
+/// off: no PWM pulse in the next 100 ms, and the rover does not move. And
+/// the stack the drive took (painted, every code path it ran: the boundary
+/// follower and the fault's stop are not in the replayed traces) left the
+/// static data alone: RAM is 2 KB.
 fn stays_stopped(run: &LoopRun, what: &str) {
     let (high, moved_m) = run.after_stop.expect("a stop");
     assert_eq!(high, 0, "{what}: motor pulses");
     assert!(moved_m < 1e-3, "{what}: moved {moved_m} m");
+    let peak = run.stack_peak.expect("the firmware's stack peak (M)");
+    let (_, data, bss) = elf_size(&firmware_elf());
+    println!("{what}: stack_peak={peak} data={data} bss={bss}");
+    assert!(
+        data + bss + peak <= 2_048,
+        "{what}: stack {peak} + statics {} overflow RAM",
+        data + bss
+    );
 }
 
 #[test]
