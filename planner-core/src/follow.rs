@@ -92,6 +92,10 @@ pub struct Follow {
     hit: Option<Point>,
     /// Seeking (the goal), not following.
     seeking: bool,
+    /// Steps the guard stopped before they began since the rover last
+    /// moved: that many of the boundary side's first free turns are
+    /// skipped (see [`Follow::turns_to_skip`]).
+    refused: u8,
 }
 
 impl Follow {
@@ -219,6 +223,29 @@ impl Follow {
         FollowVerdict::Hug
     }
 
+    /// Note how the last step ended: `moved` (the rover is somewhere new)
+    /// or `stopped` (the guard stopped it before it began: after the turn
+    /// the beams saw the way blocked).
+    pub fn after_step(&mut self, moved: bool, stopped: bool) {
+        if moved {
+            self.refused = 0;
+        } else if stopped {
+            self.refused = self.refused.saturating_add(1);
+        }
+    }
+
+    /// How many of the first free turns (in [`Follow::turns`]' order) to
+    /// pass over. A turn towards the boundary that the planner's view
+    /// shows free can be blocked in the guard's view after the turn (a
+    /// face beside the rover that only the turned beams see); the turn
+    /// away from it then looks free again, and the rover would turn to
+    /// the refused heading and back for ever (seen on generated worlds:
+    /// 800 cycles on one spot). Each refusal on the spot passes over one
+    /// more, up to all but the last (the other edge of the sector).
+    pub fn turns_to_skip(&self) -> usize {
+        (self.refused as usize).min(SENSOR_COUNT - 1)
+    }
+
     /// The turns to try while following, the boundary's side first: the
     /// sensors' angles from that side's edge of the sector to the other's.
     pub fn turns(&self, cfg: &Config) -> [Angle; SENSOR_COUNT] {
@@ -293,6 +320,24 @@ mod tests {
         assert_eq!(v, FollowVerdict::Hug);
         assert!(f.following());
         (cfg, f)
+    }
+
+    #[test]
+    fn refusals_on_the_spot_pass_over_turns_until_the_rover_moves() {
+        let mut f = Follow::default();
+        f.start();
+        assert_eq!(f.turns_to_skip(), 0);
+        f.after_step(false, true);
+        f.after_step(false, false); // the turn away: no step, no refusal
+        f.after_step(false, true);
+        assert_eq!(f.turns_to_skip(), 2);
+        for _ in 0..10 {
+            f.after_step(false, true);
+        }
+        // Never all five: the other edge of the sector stays.
+        assert_eq!(f.turns_to_skip(), SENSOR_COUNT - 1);
+        f.after_step(true, false);
+        assert_eq!(f.turns_to_skip(), 0);
     }
 
     #[test]

@@ -321,6 +321,7 @@ impl Planner {
             self.follow.start();
         }
         if self.follow.active() {
+            self.follow.after_step(moved, stopped);
             let bearing_rel = bearing.sub(pose.heading);
             let in_sector = bearing_rel.abs_signed() <= self.config.sector_half_width().0;
             let free_to_goal = if in_sector {
@@ -567,7 +568,8 @@ impl Planner {
                         .turns(cfg)
                         .into_iter()
                         .map(|turn| (turn, free(turn)))
-                        .find(|&(_, way)| way >= follow::FOLLOW_FREE_MM)
+                        .filter(|&(_, way)| way >= follow::FOLLOW_FREE_MM)
+                        .nth(self.follow.turns_to_skip())
                 };
                 let (turn, way) = found.unwrap_or((Angle::ZERO, free(Angle::ZERO)));
                 if way.min(most) < cfg.min_step_mm {

@@ -189,3 +189,42 @@ fn the_boundary_follower_reaches_a_goal_the_escape_gave_up_on() {
         assert_eq!(rows[0].outcome, Outcome::Unreachable, "seed {seed}");
     }
 }
+
+/// The longest time, s, the rover stayed within 5 cm of one spot.
+fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
+    let mut longest = 0.0f64;
+    for (i, a) in trace.iter().enumerate() {
+        let left = trace[i..]
+            .iter()
+            .find(|b| (b.x - a.x).hypot(b.y - a.y) > 0.05)
+            .map_or(trace.last().map_or(a.t, |l| l.t), |b| b.t);
+        longest = longest.max(left - a.t);
+    }
+    longest
+}
+
+/// gen-117 (a world `gen` writes for seed 117, as gen-144 above), seed 1:
+/// after the escape gave up, the follower turned towards the boundary to
+/// a heading the guard refused after the turn (a face only the turned
+/// beams saw), turned away, and from there took the refused heading again:
+/// 800 cycles on one spot, then "unreachable" (planner-core's
+/// `Follow::turns_to_skip`). Now each refusal on the spot passes over one
+/// more turn and the rover gets off it. Measured here (no reference, so
+/// the simulator's budget is the straight line's): 428.8 s within 5 cm of
+/// one spot without the rule, 132.4 s with it (the escape's rocking in the
+/// same pocket before it gives up, steps of 1–6 cm).
+#[test]
+fn the_boundary_follower_does_not_retake_a_refused_turn() {
+    use sim_host::generate::RandomWorld;
+    use sim_host::scenario::Scenario;
+    let world = RandomWorld::paper_env2("gen-117", [6.0, 7.3], [12.7, 9.75], 117);
+    let sc = Scenario::parse(&world.to_toml("gen --seed 117"), "gen-117.toml".as_ref()).unwrap();
+    let run = sim_host::sim::run(&sc, &SimConfig::default(), None);
+    let stuck_s = longest_on_one_spot(&run.trace);
+    println!(
+        "gen-117: {:?} after {} cycles, {:.2} m; longest on one spot {stuck_s:.1} s",
+        run.outcome, run.steps, run.path_length
+    );
+    assert_ne!(run.outcome, Outcome::Collision);
+    assert!(stuck_s < 200.0, "{stuck_s:.1} s on one spot");
+}
