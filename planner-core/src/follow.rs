@@ -22,7 +22,11 @@
 //!   is kept for the goal, as a Bug algorithm keeps it;
 //! * **leave** (DistBug's rule) where the way towards the goal is free far
 //!   enough to end `progress_mm` nearer the goal than the nearest the rover
-//!   has been since the hit: seek again. A boundary out of sight for
+//!   has been since the hit: seek again. Where the goal is outside the
+//!   sensed sector that rule cannot be asked, so past the boundary's point
+//!   nearest the goal (its distance, at the nearest since the hit, grows
+//!   again) the rover looks: seeks, turning towards the goal. A boundary
+//!   out of sight for
 //!   [`LOST_CYCLES`] is left too. Meeting a boundary again no
 //!   `progress_mm` nearer than that nearest, the rover follows on from the
 //!   same hit point (the same boundary, so that its loop can close);
@@ -88,6 +92,8 @@ pub struct Follow {
     cycles: u16,
     /// The nearest the rover has been to the goal since the hit, mm.
     nearest_mm: u16,
+    /// The goal's distance at the last cycle of following, mm.
+    last_mm: u16,
     /// Where the boundary followed was met (`None` before the first).
     hit: Option<Point>,
     /// Seeking (the goal), not following.
@@ -172,7 +178,17 @@ impl Follow {
                 .iter()
                 .any(|&r| r.obstacle_mm().is_some_and(|d| d <= SIGHT_MM));
             self.lost = if seen { 0 } else { self.lost.saturating_add(1) };
-            if leave || self.lost >= LOST_CYCLES {
+            // Where the goal is outside the sensed sector, the leave rule
+            // cannot be asked: round a small obstacle with the goal beside
+            // the rover the follower would close a loop with a way to the
+            // goal in plain view behind the beams. So where the goal's
+            // distance, after coming to the nearest since the hit, grows
+            // again (the boundary's point nearest the goal, as Bug1 leaves
+            // from), look: seek, which turns towards the goal and either
+            // goes or follows on from the same hit point.
+            let look = !in_sector && self.last_mm == self.nearest_mm && goal_mm > self.last_mm;
+            self.last_mm = goal_mm;
+            if leave || look || self.lost >= LOST_CYCLES {
                 self.seeking = true;
                 self.lost = 0;
             } else {
@@ -220,6 +236,7 @@ impl Follow {
         self.lost = 0;
         self.cycles = 0;
         self.nearest_mm = goal_mm;
+        self.last_mm = goal_mm;
         FollowVerdict::Hug
     }
 
@@ -407,6 +424,25 @@ mod tests {
         let v = f.decide(&cfg, &WALL_LEFT, at, 2_950, Angle::ZERO, 300);
         assert_eq!(v, FollowVerdict::Seek(Angle::ZERO, FOLLOW_STEP_MM));
         assert!(f.active() && !f.following());
+    }
+
+    #[test]
+    fn past_the_nearest_point_with_the_goal_beside_it_looks() {
+        let (cfg, mut f) = following();
+        let beside = Angle::from_deg(90);
+        // Nearer and nearer, the goal outside the sector: follow on.
+        for (y, d) in [(100, 2_950), (200, 2_900)] {
+            let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, y), d, beside, 0);
+            assert_eq!(v, FollowVerdict::Hug);
+        }
+        // Farther again: the last point was the nearest, look (a turn
+        // towards the goal, to the sector's edge, on the spot).
+        let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, 300), 2_920, beside, 0);
+        assert_eq!(v, FollowVerdict::Seek(cfg.sector_half_width(), 0));
+        // The way blocked, no nearer: the same boundary, the same hit.
+        let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, 300), 2_920, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::Hug);
+        assert_eq!(f.hit(), Some(P0));
     }
 
     #[test]
