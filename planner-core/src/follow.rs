@@ -33,7 +33,9 @@
 //! * **unreachable** when the rover comes back within `2·revisit_mm` of
 //!   the hit point after having been more than `4·revisit_mm` away from it
 //!   (the track round a boundary passes the hit point at the follower's
-//!   distance, not the seek's): it has been all round the boundary without
+//!   distance, not the seek's), from the other side than it left that
+//!   radius by (out of a dead end beside the hit point it comes back the
+//!   way it went, and goes on): it has been all round the boundary without
 //!   finding a way off it nearer the goal (the Bug family's argument: a
 //!   boundary that encloses the goal or the rover has no such point), or
 //!   when `2·give_up_steps` cycles pass since the hit (a safety net for a
@@ -86,6 +88,10 @@ pub struct Follow {
     /// Whether the rover has been more than `4·revisit_mm` from the hit
     /// point.
     away: bool,
+    /// Whether it was within `2·revisit_mm` of the hit point last cycle.
+    near_hit: bool,
+    /// Its offset from the hit point (mm) when it last left that radius.
+    out: (i16, i16),
     /// Cycles in a row with nothing in sight while following.
     lost: u8,
     /// Cycles since the last new hit point (since the start before it).
@@ -198,13 +204,35 @@ impl Follow {
                 // The track round a boundary passes its hit point at the
                 // follower's distance, not the seek's: "back" is twice
                 // `revisit_mm`, "away" four times.
+                //
+                // Round the boundary, the rover comes back to the hit point
+                // from the side opposite the one it left it by; out of a
+                // dead end beside the hit point it comes back the way it
+                // went. So the loop closes only on coming back from the
+                // other side (the offset from the hit point on entering
+                // "back" against the one on leaving it); coming back the
+                // same way, the rover must go away again first.
                 let back = esc.revisit_mm.saturating_mul(2);
+                let near_hit = within(hit, robot, back);
+                let (x, y) = hit.to(robot);
+                let (x, y) = (clamp14(x), clamp14(y));
                 if !self.away {
                     self.away = !within(hit, robot, back.saturating_mul(2));
-                } else if within(hit, robot, back) {
-                    self.side = 0;
-                    return FollowVerdict::GiveUp;
+                } else if near_hit && !self.near_hit {
+                    // Every offset clamped below 2^14 (only the sign of
+                    // the dot product counts; the offsets are a few hundred
+                    // mm): the sum fits i32 (no 64-bit multiply on the AVR).
+                    let along = self.out.0 as i32 * x + self.out.1 as i32 * y;
+                    if along <= 0 {
+                        self.side = 0;
+                        return FollowVerdict::GiveUp;
+                    }
+                    self.away = false;
                 }
+                if self.near_hit && !near_hit {
+                    self.out = (x as i16, y as i16);
+                }
+                self.near_hit = near_hit;
                 return FollowVerdict::Hug;
             }
         }
@@ -233,6 +261,7 @@ impl Follow {
         }
         self.hit = Some(robot);
         self.away = false;
+        self.near_hit = true;
         self.lost = 0;
         self.cycles = 0;
         self.nearest_mm = goal_mm;
@@ -297,6 +326,11 @@ fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
     } else {
         1
     }
+}
+
+/// `v` clamped to ±(2^14 − 1).
+fn clamp14(v: i32) -> i32 {
+    v.clamp(-16_383, 16_383)
 }
 
 /// `a` clamped to ±`half`.
@@ -458,6 +492,30 @@ mod tests {
         let v = f.decide(&cfg, &WALL_LEFT, Point::new(0, 250), 3_000, Angle::ZERO, 0);
         assert_eq!(v, FollowVerdict::GiveUp);
         assert!(!f.active());
+    }
+
+    #[test]
+    fn out_of_a_dead_end_and_back_past_the_hit_point_is_no_loop() {
+        let (cfg, mut f) = following();
+        // Up a dead end beside the hit point and back down the same way.
+        for (x, y) in [(0, 400), (0, 800), (100, 800), (100, 400), (100, 250)] {
+            let v = f.decide(&cfg, &WALL_LEFT, Point::new(x, y), 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug, "at ({x}, {y})");
+        }
+        // On along the boundary, round it and back from the other side.
+        let track = [
+            (400, 0),
+            (2_000, 0),
+            (2_000, -2_000),
+            (-1_000, -2_000),
+            (-1_000, 0),
+        ];
+        for (x, y) in track {
+            let v = f.decide(&cfg, &WALL_LEFT, Point::new(x, y), 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug, "at ({x}, {y})");
+        }
+        let v = f.decide(&cfg, &WALL_LEFT, Point::new(-250, 0), 3_000, Angle::ZERO, 0);
+        assert_eq!(v, FollowVerdict::GiveUp);
     }
 
     #[test]
