@@ -160,6 +160,17 @@ fn the_route_layer_drives_the_narrow_passage() {
     }
 }
 
+/// The world `gen --seed SEED` writes (the paper's environment 2
+/// parameters, its default start and goal), named `gen-SEED`, and its file
+/// text.
+fn generated(seed: u64) -> (String, String) {
+    use sim_host::generate::RandomWorld;
+    let name = format!("gen-{seed}");
+    let world = RandomWorld::paper_env2(&name, [6.0, 7.3], [12.7, 9.75], seed);
+    let text = world.to_toml(&format!("gen --seed {seed}"));
+    (name, text)
+}
+
 /// Boundary following once the escape gives up (planner-core's `follow`
 /// module). gen-102 is a world `gen` writes for seed 102 (the paper's
 /// environment 2 parameters; no rule was tuned on it): with seed 1 the
@@ -174,12 +185,11 @@ fn the_route_layer_drives_the_narrow_passage() {
 /// unreachable: the follower goes round its wall and closes the loop.
 #[test]
 fn the_boundary_follower_reaches_a_goal_the_escape_gave_up_on() {
-    use sim_host::generate::RandomWorld;
     let dir = std::env::temp_dir().join(format!("follow-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    let file = dir.join("gen-102.toml");
-    let world = RandomWorld::paper_env2("gen-102", [6.0, 7.3], [12.7, 9.75], 102);
-    std::fs::write(&file, world.to_toml("gen --seed 102")).unwrap();
+    let (name, text) = generated(102);
+    let file = dir.join(format!("{name}.toml"));
+    std::fs::write(&file, text).unwrap();
     let rows = run_all(&[file], &SimConfig::default(), false).unwrap();
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(rows[0].outcome, Outcome::Reached, "{:?}", rows[0]);
@@ -208,7 +218,7 @@ fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
     longest
 }
 
-/// gen-117 (a world `gen` writes for seed 117, as gen-144 above), seed 1:
+/// gen-117 (a world `gen` writes for seed 117, as gen-102 above), seed 1:
 /// after the escape gave up, the follower turned towards the boundary to
 /// a heading the guard refused after the turn (a face only the turned
 /// beams saw), turned away, and from there took the refused heading again:
@@ -220,10 +230,9 @@ fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
 /// same pocket before it gives up, steps of 1–6 cm).
 #[test]
 fn the_boundary_follower_does_not_retake_a_refused_turn() {
-    use sim_host::generate::RandomWorld;
     use sim_host::scenario::Scenario;
-    let world = RandomWorld::paper_env2("gen-117", [6.0, 7.3], [12.7, 9.75], 117);
-    let sc = Scenario::parse(&world.to_toml("gen --seed 117"), "gen-117.toml".as_ref()).unwrap();
+    let (name, text) = generated(117);
+    let sc = Scenario::parse(&text, format!("{name}.toml").as_ref()).unwrap();
     let run = sim_host::sim::run(&sc, &SimConfig::default(), None);
     let stuck_s = longest_on_one_spot(&run.trace);
     println!(

@@ -58,6 +58,16 @@ pub fn elf_size(elf: &std::path::Path) -> (u32, u32, u32) {
     crate::parse_size(&text).unwrap_or_else(|| panic!("avr-size output: {text}"))
 }
 
+/// The ATmega328P's RAM, bytes.
+pub const RAM_BYTES: u32 = 2_048;
+
+/// RAM the firmware needs with a stack of `stack_peak` bytes: its static
+/// data (`.data` + `.bss` of the image) plus the stack; (data, bss, total).
+pub fn ram_used(stack_peak: u32) -> (u32, u32, u32) {
+    let (_, data, bss) = elf_size(&firmware_elf());
+    (data, bss, data + bss + stack_peak)
+}
+
 /// The firmware running in simavr at 16 MHz.
 pub struct Avr {
     /// The emulator.
@@ -123,6 +133,13 @@ impl Avr {
     pub fn request(&mut self, line: &str) -> Option<String> {
         self.send(format!("{line}\n").as_bytes());
         self.read_line(100)
+    }
+
+    /// The firmware's painted stack peak so far, bytes (its answer to
+    /// `M`), if it answers.
+    pub fn stack_peak(&mut self) -> Option<u32> {
+        self.request("M")
+            .and_then(|l| l.strip_prefix("M stack_peak=").and_then(|v| v.parse().ok()))
     }
 
     /// Replay frames toward `goal` in the firmware's replay mode: its
@@ -414,10 +431,7 @@ pub fn drive_with(
         }
         (high, p.dist(stopped_at))
     });
-    let stack_peak = after_stop.and_then(|_| {
-        a.request("M")
-            .and_then(|l| l.strip_prefix("M stack_peak=").and_then(|v| v.parse().ok()))
-    });
+    let stack_peak = after_stop.and_then(|_| a.stack_peak());
     LoopRun {
         outcome,
         seconds: t,

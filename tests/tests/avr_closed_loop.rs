@@ -2,7 +2,7 @@
 //! worlds and sensors on its ADC pins, its motor pins and encoder inputs
 //! closing the loop (see `rover_tests::avr::drive`).
 
-use rover_tests::avr::{drive, drive_with, elf_size, firmware_elf, LoopOutcome, LoopRun, Unplug};
+use rover_tests::avr::{drive, drive_with, ram_used, LoopOutcome, LoopRun, Unplug, RAM_BYTES};
 use rover_tests::scenario;
 
 fn reaches(rel: &str) {
@@ -44,10 +44,10 @@ fn stays_stopped(run: &LoopRun, what: &str) {
     assert_eq!(high, 0, "{what}: motor pulses");
     assert!(moved_m < 1e-3, "{what}: moved {moved_m} m");
     let peak = run.stack_peak.expect("the firmware's stack peak (M)");
-    let (_, data, bss) = elf_size(&firmware_elf());
+    let (data, bss, used) = ram_used(peak);
     println!("{what}: stack_peak={peak} data={data} bss={bss}");
     assert!(
-        data + bss + peak <= 2_048,
+        used <= RAM_BYTES,
         "{what}: stack {peak} + statics {} overflow RAM",
         data + bss
     );

@@ -11,7 +11,7 @@
 //! them), and the firmware is ~26 KB of flash.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
+use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, ram_used, Avr, RAM_BYTES};
 use rover_tests::{clean_cargo, mean_worst, repo_root, standard_traces, Trace};
 use std::sync::OnceLock;
 
@@ -19,8 +19,8 @@ use std::sync::OnceLock;
 const STEP_BUDGET: u32 = 8_000;
 
 /// The traces and the firmware's answers, computed once for all tests.
-fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u16) {
-    static R: OnceLock<(Vec<Trace>, Vec<u32>, u16)> = OnceLock::new();
+fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u32) {
+    static R: OnceLock<(Vec<Trace>, Vec<u32>, u32)> = OnceLock::new();
     R.get_or_init(|| {
         let mut avr = Avr::boot();
         let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
@@ -39,10 +39,7 @@ fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u16) {
         // bounds how often the firmware can look (`GUARD_PERIOD_MS`).
         let (mean, worst) = mean_worst(&guard);
         println!("avr guard look cycles (costliest of each advance's looks, {} advances): mean={mean} worst={worst}", guard.len());
-        let peak = avr
-            .request("M")
-            .and_then(|l| l.strip_prefix("M stack_peak=").and_then(|v| v.parse().ok()))
-            .expect("stack peak reply");
+        let peak = avr.stack_peak().expect("stack peak reply");
         (traces, cycles, peak)
     })
 }
@@ -70,14 +67,11 @@ fn replay_is_bit_exact() {
 #[test]
 fn ram_within_budget() {
     let (_, _, peak) = replayed();
-    let (_, data, bss) = elf_size(&firmware_elf());
+    let (data, bss, used) = ram_used(*peak);
     println!("avr ram: data={data} bss={bss} stack_peak={peak}");
     assert!(data + bss <= 768, "data + bss {} > 768 B", data + bss);
     // The stack must not have reached the static data (2 KB of RAM).
-    assert!(
-        data + bss + *peak as u32 <= 2_048,
-        "stack {peak} + statics overflow RAM"
-    );
+    assert!(used <= RAM_BYTES, "stack {peak} + statics overflow RAM");
 }
 
 #[test]

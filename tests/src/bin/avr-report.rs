@@ -19,9 +19,8 @@ fn main() {
         }
     }
     let peak = avr
-        .request("M")
-        .and_then(|l| l.strip_prefix("M stack_peak=").map(str::to_owned))
-        .unwrap_or_else(|| "unknown".into());
+        .stack_peak()
+        .map_or_else(|| "unknown".into(), |p| p.to_string());
     let (mean, worst) = mean_worst(&cycles);
     // The same steps through the f32 build (planner-float, avr-libc math).
     let mut float = Avr::boot_elf(&f32_step_elf());
