@@ -22,6 +22,14 @@ pub const CREEP_CYCLES: i16 = 400;
 /// the row [`creep`] lays, so that all 24 are in reach.
 pub const VO_PROBE: Point = Point::new(575, -200);
 
+/// The escape's configuration for the drop sequence: the default with a
+/// give-up budget long enough for the whole sequence (the default's 200
+/// cycles without progress end it after 16 drops).
+pub const CREEP_ESCAPE: EscapeConfig = EscapeConfig {
+    give_up_steps: 1_000,
+    ..EscapeConfig::DEFAULT
+};
+
 /// Cycle `k` of the drop sequence: a rover creeping 50 mm every twelve
 /// cycles is stuck and drops a virtual obstacle each time (see `escape`).
 pub fn creep(escape: &mut Escape, cfg: &EscapeConfig, k: i16) {

@@ -58,8 +58,11 @@
 //! progress (a walled-in goal never lets the best distance improve). With
 //! `follow` set (the default) the planner then follows boundaries (the
 //! `follow` module), which reports a walled-in goal unreachable when it
-//! has been all round; without it the goal is reported unreachable at
-//! once.
+//! has been all round twice (after the first loop the escape runs again,
+//! its count started afresh: [`Escape::again`]); without it the goal is
+//! reported unreachable at once. The default budget, 200 cycles, hands
+//! over once a second 200 would do less than the follower
+//! (docs/bench.md).
 
 use crate::fixed::{
     box_within, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
@@ -147,7 +150,7 @@ impl EscapeConfig {
         radius_mm: 150,
         k_v: FORCE_ONE / 10,
         give_up_drops: 40,
-        give_up_steps: 400,
+        give_up_steps: 200,
         retreat_mm: RETREAT_MM,
         retreat_per_drop_mm: RETREAT_PER_DROP_MM,
         follow: true,
@@ -411,6 +414,14 @@ impl Escape {
             kept_force: None,
             law: Law::NONE,
         }
+    }
+
+    /// Start the give-up count again, keeping the virtual obstacles (the
+    /// boundary follower's loop closed once: see `Planner::step_raw`).
+    pub fn again(&mut self) {
+        self.best_mm = u16::MAX;
+        self.since_best = 0;
+        self.drops_since_best = 0;
     }
 
     /// Forget everything (a new goal).

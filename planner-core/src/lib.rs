@@ -131,6 +131,8 @@ pub struct Planner {
     turn_side: i8,
     spun: bool,
     unreachable: bool,
+    /// The follower's loop has closed once for this goal.
+    looped_once: bool,
     /// The goal's distance and bearing, the attraction along it (eq. 16's
     /// first term; below 2^15 per component, so 16 bits), and the position
     /// they were worked out at: a rover turning in place asks again every
@@ -179,6 +181,7 @@ impl Planner {
             stepped_from: NOWHERE,
             paper_step_mm: range,
             unreachable: false,
+            looped_once: false,
             #[cfg(feature = "report")]
             last_points: heapless::Vec::new(),
             last_readings: [Reading::Clear; SENSOR_COUNT],
@@ -206,6 +209,7 @@ impl Planner {
         self.stepped_from = NOWHERE;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
+        self.looped_once = false;
         #[cfg(feature = "report")]
         self.last_points.clear();
         self.last_readings = [Reading::Clear; SENSOR_COUNT];
@@ -338,11 +342,24 @@ impl Planner {
                 bearing_rel,
                 free_to_goal,
             ) {
-                FollowVerdict::Off | FollowVerdict::GiveUp => {
+                // Ours: a boundary followed all round the first time hands
+                // back to the potential field, its virtual obstacles kept
+                // and its give-up count started again: a gap the field can
+                // squeeze through is one the follower passes by (its way
+                // must be free for `FOLLOW_FREE_MM`), so the first loop may
+                // close round a goal that is not walled in (barn-tight-206,
+                // seed 1). The second loop is the answer.
+                FollowVerdict::Looped if !self.looped_once => {
+                    self.looped_once = true;
+                    self.follow = follow::Follow::default();
+                    self.escape.again();
+                    self.command(robot, pose.heading, 0)
+                }
+                FollowVerdict::Off | FollowVerdict::Looped | FollowVerdict::GiveUp => {
                     self.unreachable = true;
                     stop(Status::Unreachable)
                 }
-                v => self.follow_step(pose, v, free_to_goal, stopped),
+                v => self.follow_step(pose, v, free_to_goal, moved, stopped),
             };
         }
         let cfg = &self.config;
@@ -506,12 +523,7 @@ impl Planner {
         // turn the beams saw the way blocked) moved nothing: its turn counts
         // as one on the spot, and the count goes on. The count restarts
         // once a step has moved the rover.
-        if moved {
-            self.turned_in_place = 0;
-        }
-        self.turned_in_place = self
-            .turned_in_place
-            .saturating_add(relative.abs_signed() as u32);
+        Planner::count_turn(&mut self.turned_in_place, moved, relative);
         if (step == 0 || stopped) && self.turned_in_place >= FULL_TURN {
             let ahead = at_least_min(self.paper_step_mm.min(free(Angle::ZERO)) / 2);
             if ahead > 0 {
@@ -520,6 +532,16 @@ impl Planner {
             }
         }
         self.command(robot, heading, step)
+    }
+
+    /// Add this cycle's `turn` to the turning on the spot (restarted once a
+    /// step has `moved` the rover): the pocket rule and the fold-back
+    /// filter's `held` read it, while following a boundary too.
+    fn count_turn(turned_in_place: &mut u32, moved: bool, turn: Angle) {
+        if moved {
+            *turned_in_place = 0;
+        }
+        *turned_in_place = turned_in_place.saturating_add(turn.abs_signed() as u32);
     }
 
     /// The cycle's command: a step of `step_mm` along `heading` from
@@ -545,6 +567,7 @@ impl Planner {
         pose: Pose,
         verdict: FollowVerdict,
         free_to_goal_mm: u16,
+        moved: bool,
         stopped: bool,
     ) -> Output {
         let cfg = &self.config;
@@ -579,6 +602,12 @@ impl Planner {
                 }
             }
         };
+        // Held on the spot while following, the fold-back filter compares
+        // each sensor with the one that looked its way the cycle before
+        // (else, turning round in a tight pocket, each outer beam's view of
+        // a free way read "too close" through its own last look at the
+        // wall, and no heading was ever free: gen-223, seed 1).
+        Planner::count_turn(&mut self.turned_in_place, moved, turn);
         self.command(pose.position, pose.heading.add(turn), step)
     }
 
@@ -1054,10 +1083,14 @@ mod tests {
 
     #[test]
     fn walled_in_goal_becomes_unreachable() {
-        // The rover never gets nearer: escape gives up after its budget.
+        // The rover never gets nearer: the escape gives up after its
+        // budget, then the boundary follower after its own (it never
+        // meets a boundary to go round).
         let mut p = planner(Point::new(3_000, 0));
+        let esc = p.config().escape;
+        let budget = esc.give_up_steps * (follow::BUDGET_GIVE_UPS + 1) + 10;
         let mut status = Status::Moving;
-        for _ in 0..2_000 {
+        for _ in 0..budget {
             status = p.step_raw(at(0, 0, 180), &[FAR; 5]).status;
             if status == Status::Unreachable {
                 break;
@@ -1103,6 +1136,43 @@ mod tests {
             assert_eq!(o.command.heading, Angle::ZERO);
             assert_eq!(o.command.step_mm, follow::FOLLOW_STEP_MM);
         }
+    }
+
+    #[test]
+    fn the_first_loop_round_a_boundary_hands_back_to_the_field() {
+        // A boundary all round, 150 mm off every beam, the goal 30 m away
+        // behind it: the escape gives up after 10 cycles held on one spot,
+        // the follower meets the boundary there and is taken round it
+        // (the poses below) back to its hit point from the other side.
+        let escape = EscapeConfig {
+            give_up_steps: 10,
+            ..EscapeConfig::default()
+        };
+        let mut p = planner_with(escape, Point::new(-30_000, 0));
+        let wall = [count_for(&p, 150); 5];
+        let round = |p: &mut Planner, (x, y): (i16, i16)| {
+            let mut status = Status::Moving;
+            for _ in 0..30 {
+                status = p.step_raw(at(x, y, 180), &wall).status;
+                if p.follow().following() {
+                    break;
+                }
+            }
+            assert!(p.follow().following(), "following from ({x}, {y})");
+            assert_eq!(p.follow().hit(), Some(Point::new(x, y)));
+            assert_eq!(status, Status::Moving);
+            let track = [(700, 0), (2_000, 0), (2_000, 2_000), (0, 2_000), (0, 700)];
+            for (dx, dy) in track {
+                let out = p.step_raw(at(x + dx, y + dy, 180), &wall);
+                assert_eq!(out.status, Status::Moving, "at ({}, {})", x + dx, y + dy);
+            }
+            p.step_raw(at(x, y + 250, 180), &wall).status
+        };
+        // The first loop: back to the potential field, not "unreachable".
+        assert_eq!(round(&mut p, (0, 0)), Status::Moving);
+        assert!(!p.follow().active());
+        // Its give-up count starts again; the second loop is the answer.
+        assert_eq!(round(&mut p, (0, 250)), Status::Unreachable);
     }
 
     proptest::proptest! {

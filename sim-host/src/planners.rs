@@ -194,11 +194,29 @@ impl SimPlanner {
         g == planner_core::Guard::Continue
     }
 
-    /// Whether the core follows a boundary (or seeks one), and where it
-    /// met the last one (planner `eapf`; `SIM_DEBUG` prints it).
-    pub fn follow_state(&self) -> Option<(bool, Option<V2>)> {
-        self.eapf()
-            .map(|p| (p.follow().active(), p.follow().hit().map(to_v2)))
+    /// The follower's state for `SIM_DEBUG` (planner `eapf`): off, seek or
+    /// follow, where it met the last boundary, the filtered readings (mm;
+    /// `-` nothing in range) and how many flank points the guard keeps.
+    pub fn follow_state(&self) -> Option<String> {
+        self.eapf().map(|p| {
+            let f = p.follow();
+            let mode = match (f.active(), f.following()) {
+                (false, _) => "off",
+                (true, false) => "seek",
+                (true, true) => "follow",
+            };
+            let readings: Vec<String> = p
+                .last_readings()
+                .iter()
+                .map(|r| r.obstacle_mm().map_or("-".into(), |d| d.to_string()))
+                .collect();
+            format!(
+                "{mode} hit {:?} readings [{}] flank {}",
+                f.hit().map(to_v2),
+                readings.join(", "),
+                p.flank().points().len()
+            )
+        })
     }
 
     /// Collision points of the last cycle, m.

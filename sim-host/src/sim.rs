@@ -255,7 +255,9 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
                 p.x, p.y, heading.to_degrees(), raw, true_mm.collect::<Vec<_>>().join(", "),
                 out.heading.to_degrees(), out.step_m, out.status
             );
-            eprintln!("  follow {:?}", planner.follow_state());
+            if let Some(state) = planner.follow_state() {
+                eprintln!("  {state}");
+            }
         }
         for q in planner.last_collision_points() {
             if seen.iter().all(|s| s.dist(q) > 0.03) {

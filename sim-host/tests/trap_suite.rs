@@ -227,18 +227,61 @@ fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
 /// more turn and the rover gets off it. Measured here (no reference, so
 /// the simulator's budget is the straight line's): 428.8 s within 5 cm of
 /// one spot without the rule, 132.4 s with it (the escape's rocking in the
-/// same pocket before it gives up, steps of 1–6 cm).
+/// same pocket before it gives up, steps of 1–6 cm); 53.0 s since the
+/// escape hands over after 200 cycles and the follower's turns count for
+/// the fold-back filter (docs/bench.md).
 #[test]
 fn the_boundary_follower_does_not_retake_a_refused_turn() {
+    let stuck_s = longest_on_one_spot_in(117);
+    assert!(stuck_s < 200.0, "{stuck_s:.1} s on one spot");
+}
+
+/// Drive `generated(seed)` with seed 1 and no reference (the simulator's
+/// budget is the straight line's), print the outcome, check it is no
+/// collision, and return the longest time, s, within 5 cm of one spot.
+fn longest_on_one_spot_in(seed: u64) -> f64 {
     use sim_host::scenario::Scenario;
-    let (name, text) = generated(117);
+    let (name, text) = generated(seed);
     let sc = Scenario::parse(&text, format!("{name}.toml").as_ref()).unwrap();
     let run = sim_host::sim::run(&sc, &SimConfig::default(), None);
     let stuck_s = longest_on_one_spot(&run.trace);
     println!(
-        "gen-117: {:?} after {} cycles, {:.2} m; longest on one spot {stuck_s:.1} s",
+        "{name}: {:?} after {} cycles, {:.2} m; longest on one spot {stuck_s:.1} s",
         run.outcome, run.steps, run.path_length
     );
-    assert_ne!(run.outcome, Outcome::Collision);
-    assert!(stuck_s < 200.0, "{stuck_s:.1} s on one spot");
+    assert_ne!(run.outcome, Outcome::Collision, "{name}");
+    stuck_s
+}
+
+/// gen-223 (a world `gen` writes for seed 223, as gen-102 above), seed 1:
+/// following a boundary into a tight pocket, the rover turned on the spot
+/// and each outer beam's view of a free way read "too close" (the
+/// fold-back filter compared it with that beam's own last look, at the
+/// wall), so no heading was ever free. The turns on the spot while
+/// following did not count towards the filter's "held" (three full turns:
+/// then each sensor is compared with the one that looked its way the
+/// cycle before), as they do in the potential field. Now they do, and the
+/// rover turns its way out (planner-core's `Planner::count_turn`).
+#[test]
+fn the_follower_turning_in_a_pocket_trusts_the_beams_that_looked_there() {
+    let stuck_s = longest_on_one_spot_in(223);
+    assert!(stuck_s < 60.0, "{stuck_s:.1} s on one spot");
+}
+
+/// The U-trap with five noise seeds. With seed 5 the escape gave up inside
+/// the U, the follower looked out of it, sought back in to the hit point
+/// from the other side and closed a false loop ("unreachable"); now only
+/// following into the hit point's radius closes the loop (planner-core's
+/// `Follow::pass_hit`).
+#[test]
+fn the_u_trap_is_reached_with_every_seed() {
+    let files = library_files(&["traps/u-trap.toml"]);
+    for seed in 1..=5 {
+        let cfg = SimConfig {
+            seed,
+            ..SimConfig::default()
+        };
+        let rows = run_all(&files, &cfg, false).unwrap();
+        assert_eq!(rows[0].outcome, Outcome::Reached, "seed {seed}");
+    }
 }

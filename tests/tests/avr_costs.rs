@@ -10,7 +10,7 @@
 mod bench_inputs;
 
 use planner_core::command::free_distance_mm;
-use planner_core::escape::{Escape, EscapeConfig};
+use planner_core::escape::Escape;
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{AdcProfile, Angle, ConfigBuilder, Reading};
 use rover_tests::avr::{costs_elf, Avr};
@@ -47,7 +47,7 @@ fn host(name: &str, a: i32, b: i32) -> (i32, i32) {
         "vo_force" => {
             // The bench's drop sequence (bounded as there), up to `a`
             // obstacles held.
-            let esc = EscapeConfig::default();
+            let esc = bench_inputs::CREEP_ESCAPE;
             let mut escape = Escape::new();
             for k in 0..bench_inputs::CREEP_CYCLES {
                 if escape.len() >= a as usize {

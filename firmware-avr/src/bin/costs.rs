@@ -36,7 +36,7 @@ mod serial;
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::command::free_distance_mm;
-use planner_core::escape::{Escape, EscapeConfig, VIRTUAL_CAPACITY};
+use planner_core::escape::{Escape, VIRTUAL_CAPACITY};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{Angle, Reading};
 use serial::Serial;
@@ -141,7 +141,7 @@ fn main() -> ! {
     }
     // Virtual obstacles: the force is timed as each is dropped, up to the
     // escape's capacity (all 24 in reach: the worst case).
-    let esc = EscapeConfig::default();
+    let esc = bench_inputs::CREEP_ESCAPE;
     let mut escape = Escape::new();
     let (mut held, mut k) = (0, 0i16);
     while held < VIRTUAL_CAPACITY && k < bench_inputs::CREEP_CYCLES {
