@@ -64,9 +64,8 @@ pub const FOLLOW_STEP_MM: u16 = 200;
 pub const SIGHT_MM: u16 = 300;
 /// The follower's safety net: a boundary followed from one hit point for
 /// this many times the escape's `give_up_steps` ends in "unreachable".
-/// Generous: a long boundary with tight spots on it takes many cycles of
-/// turning on the spot (at 2, five seeds of 200 generated worlds gave 11
-/// reachable goals up, at 12 one: docs/bench.md).
+/// Generous: at 2, five seeds of 200 generated worlds gave 11 reachable
+/// goals up, at 12 one (docs/bench.md).
 pub const BUDGET_GIVE_UPS: u16 = 12;
 /// Cycles in a row with nothing in sight after which the boundary is lost:
 /// more than the turns to the sector's edge that bring a convex corner back
@@ -175,6 +174,10 @@ impl Follow {
         let esc = &cfg.escape;
         let half = cfg.sector_half_width();
         let in_sector = bearing_rel.abs_signed() <= half.0;
+        // The track round a boundary passes its hit point at the
+        // follower's distance, not the seek's: "back" is twice
+        // `revisit_mm`, "away" four times.
+        let back = esc.revisit_mm.saturating_mul(2);
         self.cycles = self.cycles.saturating_add(1);
         if self.cycles > esc.give_up_steps.saturating_mul(BUDGET_GIVE_UPS) {
             self.side = 0;
@@ -212,10 +215,6 @@ impl Follow {
                 // The nearest counts where the boundary was followed from
                 // (a seek from here compares with what came before).
                 self.nearest_mm = nearest;
-                // The track round a boundary passes its hit point at the
-                // follower's distance, not the seek's: "back" is twice
-                // `revisit_mm`, "away" four times.
-                //
                 // Round the boundary, the rover comes back to the hit point
                 // from the side opposite the one it left it by; out of a
                 // dead end beside the hit point it comes back the way it
@@ -223,7 +222,6 @@ impl Follow {
                 // other side (the offset from the hit point on entering
                 // "back" against the one on leaving it); coming back the
                 // same way, the rover must go away again first.
-                let back = esc.revisit_mm.saturating_mul(2);
                 let (entered, (x, y)) = self.pass_hit(hit, robot, back);
                 if !self.away {
                     self.away = !within(hit, robot, back.saturating_mul(2));
@@ -247,7 +245,7 @@ impl Follow {
         // seed 5): the hit point's radius is tracked, but only following
         // into it can close the loop.
         if let Some(hit) = self.hit {
-            self.pass_hit(hit, robot, esc.revisit_mm.saturating_mul(2));
+            self.pass_hit(hit, robot, back);
         }
         if !in_sector {
             return FollowVerdict::Seek(clamp(bearing_rel, half), 0);
@@ -304,6 +302,22 @@ impl Follow {
         (self.refused as usize).min(SENSOR_COUNT - 1)
     }
 
+    /// Track the rover against the hit point's radius `back`: whether it
+    /// has just come within it, and its offset from the hit point (each
+    /// axis clamped below 2^14). Leaving the radius, the offset is kept as
+    /// the way out (`out`).
+    fn pass_hit(&mut self, hit: Point, robot: Point, back: u16) -> (bool, (i32, i32)) {
+        let near_hit = within(hit, robot, back);
+        let (x, y) = hit.to(robot);
+        let (x, y) = (clamp14(x), clamp14(y));
+        let entered = near_hit && !self.near_hit;
+        if self.near_hit && !near_hit {
+            self.out = (x as i16, y as i16);
+        }
+        self.near_hit = near_hit;
+        (entered, (x, y))
+    }
+
     /// The turns to try while following, the boundary's side first: the
     /// sensors' angles from that side's edge of the sector to the other's.
     pub fn turns(&self, cfg: &Config) -> [Angle; SENSOR_COUNT] {
@@ -343,24 +357,6 @@ fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
 /// `v` clamped to ±(2^14 − 1).
 fn clamp14(v: i32) -> i32 {
     v.clamp(-16_383, 16_383)
-}
-
-impl Follow {
-    /// Track the rover against the hit point's radius `back`: whether it
-    /// has just come within it, and its offset from the hit point (each
-    /// axis clamped below 2^14). Leaving the radius, the offset is kept as
-    /// the way out (`out`).
-    fn pass_hit(&mut self, hit: Point, robot: Point, back: u16) -> (bool, (i32, i32)) {
-        let near_hit = within(hit, robot, back);
-        let (x, y) = hit.to(robot);
-        let (x, y) = (clamp14(x), clamp14(y));
-        let entered = near_hit && !self.near_hit;
-        if self.near_hit && !near_hit {
-            self.out = (x as i16, y as i16);
-        }
-        self.near_hit = near_hit;
-        (entered, (x, y))
-    }
 }
 
 /// `a` clamped to ±`half`.

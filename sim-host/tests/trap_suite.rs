@@ -194,15 +194,19 @@ fn the_boundary_follower_reaches_a_goal_the_escape_gave_up_on() {
     std::fs::remove_dir_all(&dir).unwrap();
     assert_eq!(rows[0].outcome, Outcome::Reached, "{:?}", rows[0]);
 
-    let walled = library_files(&["traps/walled-in.toml"]);
     for seed in 1..=3 {
-        let cfg = SimConfig {
-            seed,
-            ..SimConfig::default()
-        };
-        let rows = run_all(&walled, &cfg, false).unwrap();
-        assert_eq!(rows[0].outcome, Outcome::Unreachable, "seed {seed}");
+        let outcome = library_outcome("traps/walled-in.toml", seed);
+        assert_eq!(outcome, Outcome::Unreachable, "seed {seed}");
     }
+}
+
+/// The outcome of the library file `rel` with noise seed `seed`.
+fn library_outcome(rel: &str, seed: u64) -> Outcome {
+    let cfg = SimConfig {
+        seed,
+        ..SimConfig::default()
+    };
+    run_all(&library_files(&[rel]), &cfg, false).unwrap()[0].outcome
 }
 
 /// The longest time, s, the rover stayed within 5 cm of one spot.
@@ -275,13 +279,8 @@ fn the_follower_turning_in_a_pocket_trusts_the_beams_that_looked_there() {
 /// `Follow::pass_hit`).
 #[test]
 fn the_u_trap_is_reached_with_every_seed() {
-    let files = library_files(&["traps/u-trap.toml"]);
     for seed in 1..=5 {
-        let cfg = SimConfig {
-            seed,
-            ..SimConfig::default()
-        };
-        let rows = run_all(&files, &cfg, false).unwrap();
-        assert_eq!(rows[0].outcome, Outcome::Reached, "seed {seed}");
+        let outcome = library_outcome("traps/u-trap.toml", seed);
+        assert_eq!(outcome, Outcome::Reached, "seed {seed}");
     }
 }
