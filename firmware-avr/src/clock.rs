@@ -51,17 +51,42 @@ pub fn millis() -> u32 {
     interrupt::free(|cs| MILLIS.borrow(cs).get())
 }
 
-/// CPU cycles since start (wraps after 268 s), exact.
-pub fn cycles() -> u32 {
+/// A raw reading of the cycle counter, resolved by [`Stamp::cycles`]
+/// after a timed span: the reading runs the same instructions whatever the
+/// counter holds, so that every span costs the same (the resolution
+/// branches on the value, and would put 6 or 7 cycles into a span).
+#[derive(Clone, Copy)]
+pub struct Stamp {
+    lo: u16,
+    pending: u8,
+    overflows: u16,
+}
+
+/// Read the cycle counter (interrupts on or off).
+pub fn stamp() -> Stamp {
     interrupt::free(|cs| {
         let dp = steal();
-        let mut ovf = OVERFLOWS.borrow(cs).get();
-        let mut lo = dp.TC1.tcnt1().read().bits();
-        // An overflow pending but not yet serviced belongs to this count.
-        if dp.TC1.tifr1().read().bits() & 1 != 0 {
-            lo = dp.TC1.tcnt1().read().bits();
-            ovf = ovf.wrapping_add(1);
+        // Counter first, then the overflow flag: see `Stamp::cycles`.
+        let lo = dp.TC1.tcnt1().read().bits();
+        let pending = dp.TC1.tifr1().read().bits();
+        let overflows = OVERFLOWS.borrow(cs).get();
+        Stamp {
+            lo,
+            pending,
+            overflows,
         }
-        ((ovf as u32) << 16) | lo as u32
     })
+}
+
+impl Stamp {
+    /// CPU cycles since start (wraps after 268 s), exact. An overflow
+    /// pending but not yet serviced belongs to the count if the counter
+    /// was read after it (low), not just before it (high): with interrupts
+    /// off one pending overflow is counted this way, so a span timed with
+    /// interrupts off must stay below 65,536 cycles.
+    pub fn cycles(self) -> u32 {
+        let late = self.pending & 1 != 0 && self.lo < 0x8000;
+        let ovf = self.overflows.wrapping_add(u16::from(late));
+        ((ovf as u32) << 16) | self.lo as u32
+    }
 }

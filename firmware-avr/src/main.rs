@@ -65,29 +65,40 @@ fn watchdog_on(dp: &board::Dp) {
 /// moving work across the two clock reads.
 #[inline(never)]
 fn timed_step(planner: &mut Planner, pose: Pose, raw: &RawCounts) -> (planner_core::Output, u32) {
-    let t0 = clock::cycles();
+    let t0 = clock::stamp();
     compiler_fence(Ordering::SeqCst);
     let out = planner.step_raw(core::hint::black_box(pose), core::hint::black_box(raw));
     let out = core::hint::black_box(out);
     compiler_fence(Ordering::SeqCst);
-    let t1 = clock::cycles();
-    (out, t1.wrapping_sub(t0))
+    let t1 = clock::stamp();
+    (out, t1.cycles().wrapping_sub(t0.cycles()))
 }
 
+/// In replay mode the firmware's guard looks and steps run with interrupts
+/// off, so that their cycle counts are theirs alone: a Timer1 overflow
+/// interrupt (47 cycles) or a received byte (146) inside the span would be
+/// counted too, depending on when the harness's bytes arrived. The clock
+/// still reads exactly: one overflow pending while interrupts are off is
+/// counted by `clock::Stamp::cycles`, and the replayed spans are far below the
+/// 65,536 cycles between two overflows (the profiler's own count checks
+/// this, `tests/tests/avr_profile.rs`).
 impl replay::Replay for Planner {
     fn guard(&mut self, raw: &RawCounts, remaining_mm: u16) -> (Guard, u32) {
-        let t0 = clock::cycles();
-        compiler_fence(Ordering::SeqCst);
-        let g = self.guard_raw(
-            core::hint::black_box(raw),
-            core::hint::black_box(remaining_mm),
-        );
-        let g = core::hint::black_box(g);
-        compiler_fence(Ordering::SeqCst);
-        (g, clock::cycles().wrapping_sub(t0))
+        avr_device::interrupt::free(|_| {
+            let t0 = clock::stamp();
+            compiler_fence(Ordering::SeqCst);
+            let g = self.guard_raw(
+                core::hint::black_box(raw),
+                core::hint::black_box(remaining_mm),
+            );
+            let g = core::hint::black_box(g);
+            compiler_fence(Ordering::SeqCst);
+            let t1 = clock::stamp();
+            (g, t1.cycles().wrapping_sub(t0.cycles()))
+        })
     }
     fn step(&mut self, pose: Pose, raw: &RawCounts) -> (planner_core::Output, u32) {
-        timed_step(self, pose, raw)
+        avr_device::interrupt::free(|_| timed_step(self, pose, raw))
     }
 }
 

@@ -29,11 +29,14 @@ fn read_raw() -> RawCounts {
 /// Serve frames with `r`; the cost of the timing itself is subtracted
 /// from the step's cycles.
 pub fn serve(r: &mut impl Replay) {
-    let overhead = {
-        let t0 = clock::cycles();
+    // With interrupts off: an interrupt here would make every step of
+    // this replay read short (a received byte did: 146 cycles a step).
+    let overhead = avr_device::interrupt::free(|_| {
+        let t0 = clock::stamp();
         compiler_fence(Ordering::SeqCst);
-        clock::cycles().wrapping_sub(t0)
-    };
+        let t1 = clock::stamp();
+        t1.cycles().wrapping_sub(t0.cycles())
+    });
     while serial::read_blocking() == 0xa5 {
         let (mut stops, mut guard_worst) = (0u8, 0u32);
         for i in 0..serial::read_blocking() {

@@ -54,6 +54,8 @@ struct Sim {
     /// The same split of this step, and of the worst step.
     this_step: HashMap<u32, u64>,
     worst_step: (u64, HashMap<u32, u64>),
+    /// Each step's cycles as counted here, in order.
+    counted: Vec<u64>,
     /// Stack pointer at the step's entry, while one runs.
     in_step: Option<u16>,
     steps: u64,
@@ -139,6 +141,7 @@ impl Sim {
                 outer_callee: 0,
                 this_step: HashMap::new(),
                 worst_step: (0, HashMap::new()),
+                counted: Vec::new(),
                 step_entry,
                 in_step: None,
                 steps: 0,
@@ -255,6 +258,7 @@ impl Sim {
                     *self.by_callee.entry(*callee).or_default() += c;
                 }
                 let cycles = step.values().sum();
+                self.counted.push(cycles);
                 if cycles > self.worst_step.0 {
                     self.worst_step = (cycles, step);
                 }
@@ -325,6 +329,9 @@ pub struct Profile {
     /// Each step's cycles as the firmware timed them itself (Timer1), in
     /// replay order.
     pub step_cycles: Vec<u32>,
+    /// Each step's cycles as the profiler counted them (the whole call of
+    /// `timed_step`), in replay order.
+    pub step_counted: Vec<u64>,
     /// Cycles by function the instructions are in.
     pub by_function: Vec<(String, u64)>,
     /// Cycles by instruction address (byte address) and its function,
@@ -403,6 +410,7 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         steps: sim.steps,
         cycles: sim.hist.values().sum(),
         step_cycles,
+        step_counted: sim.counted,
         by_function: sorted(inner),
         by_address: {
             let mut v: Vec<(u32, String, u64)> = sim

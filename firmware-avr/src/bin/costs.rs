@@ -53,12 +53,12 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 /// measurement itself is the same each time and `overhead` can be it.
 #[inline(never)]
 fn timed(overhead: u32, f: &mut dyn FnMut() -> (i32, i32)) -> ((i32, i32), u32) {
-    let t0 = clock::cycles();
+    let t0 = clock::stamp();
     compiler_fence(Ordering::SeqCst);
     let r = black_box(f());
     compiler_fence(Ordering::SeqCst);
-    let t1 = clock::cycles();
-    (r, t1.wrapping_sub(t0).wrapping_sub(overhead))
+    let t1 = clock::stamp();
+    (r, t1.cycles().wrapping_sub(t0.cycles()).wrapping_sub(overhead))
 }
 
 /// One result line.

@@ -67,7 +67,10 @@ impl Math<f32> for AvrLibc {
     }
 }
 
-/// The float step behind the replay protocol. It has no flank points
+/// The float step behind the replay protocol. Its steps are timed with
+/// interrupts on, unlike the firmware's: they run longer than the 65,536
+/// cycles between two Timer1 overflows, which only the overflow interrupt
+/// counts, so each overflow's 47 cycles are in a float step's count. It has no flank points
 /// (planner-float is the EAPF step alone), so the guard's samples only
 /// need an answer.
 struct FloatReplay<'a> {
@@ -83,7 +86,7 @@ impl replay::Replay for FloatReplay<'_> {
     fn step(&mut self, pose: Pose, raw: &RawCounts) -> (Output, u32) {
         let (px, py) = (pose.position.x as f32, pose.position.y as f32);
         let h = pose.heading.signed() as f32 * (TAU / 65_536.0);
-        let t0 = clock::cycles();
+        let t0 = clock::stamp();
         compiler_fence(Ordering::SeqCst);
         let (fh, fs, status) = self.planner.step(
             self.cfg,
@@ -94,12 +97,12 @@ impl replay::Replay for FloatReplay<'_> {
         );
         let (fh, fs) = core::hint::black_box((fh, fs));
         compiler_fence(Ordering::SeqCst);
-        let t1 = clock::cycles();
+        let t1 = clock::stamp();
         let command = Command {
             heading: Angle((fh * (65_536.0 / TAU)) as i32 as u16),
             step_mm: fs as u16,
         };
-        (Output { command, status }, t1.wrapping_sub(t0))
+        (Output { command, status }, t1.cycles().wrapping_sub(t0.cycles()))
     }
 }
 
