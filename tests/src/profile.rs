@@ -299,6 +299,18 @@ impl Sim {
     }
 }
 
+/// The serial rate the firmware `elf` sets up, baud: booted in simavr until
+/// its first line, USART0's rate read from its registers (UBRR0, and U2X0
+/// in UCSR0A, which halves the divider).
+pub fn usart_baud(elf: &Path) -> f64 {
+    let mut sim = Sim::new(elf, u32::MAX, (u32::MAX, u32::MAX));
+    sim.line();
+    let reg = |a: usize| unsafe { *(*sim.avr).data.add(a) };
+    let ubrr = u16::from_le_bytes([reg(0xc4), reg(0xc5)]);
+    let per_bit = if reg(0xc0) & 0b10 != 0 { 8.0 } else { 16.0 };
+    F_CPU as f64 / (per_bit * (f64::from(ubrr) + 1.0))
+}
+
 /// A function's name without generic arguments: `<Force>::along` stays
 /// `Force::along`, `Deque<Point, 16>::push_back` becomes `Deque::push_back`.
 fn short(name: &str) -> String {

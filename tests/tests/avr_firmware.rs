@@ -216,3 +216,33 @@ fn cargo_run_flashes_the_firmware() {
     );
     assert!(stdout.trim().ends_with("firmware-avr.elf"), "ran {stdout}");
 }
+
+/// `cargo run --release` opens ravedude's serial console at the rate in
+/// `firmware-avr/Ravedude.toml`; the firmware must speak at that rate, or
+/// a user flashing a board reads garbage (it listened at 57,600 baud to a
+/// firmware at 115,200). Within 2.5 %: at 16 MHz the nearest rate to
+/// 115,200 is 117,647 (2.1 % fast), as Arduino's own core sets it; the
+/// Uno's USB-serial chip, at 16 MHz too, makes the same. The firmware's rate is read from its USART registers in
+/// simavr after boot.
+#[test]
+fn ravedude_opens_the_console_at_the_firmware_rate() {
+    let path = repo_root().join("firmware-avr/Ravedude.toml");
+    let text = std::fs::read_to_string(&path).expect("read Ravedude.toml");
+    let cfg: toml::Table = text.parse().expect("Ravedude.toml is TOML");
+    let general = cfg["general"].as_table().expect("[general]");
+    assert_eq!(general["board"].as_str(), Some("uno"), "an Arduino Uno");
+    assert_eq!(
+        general["open-console"].as_bool(),
+        Some(true),
+        "the console opens"
+    );
+    let console = general["serial-baudrate"]
+        .as_integer()
+        .expect("serial-baudrate") as f64;
+    let firmware = rover_tests::profile::usart_baud(&firmware_elf());
+    println!("firmware USART {firmware:.0} baud, ravedude console {console:.0}");
+    assert!(
+        (firmware - console).abs() / console < 0.025,
+        "the firmware speaks {firmware:.0} baud, ravedude listens at {console:.0}"
+    );
+}
