@@ -246,7 +246,7 @@ fn main() -> ! {
             }
             executor.start(step.command);
         }
-        // A guard look costs 6,700 cycles on average and 14,000 at most on
+        // A guard look costs 5,900 cycles on average and 12,000 at most on
         // the replayed advances (it also keeps the flank points; printed by
         // `cargo test --release -p rover-tests --test avr_firmware -- --nocapture`),
         // about one control tick: run it every GUARD_PERIOD_MS on fresh

@@ -2,7 +2,7 @@
 //!
 //! | pin | use |
 //! |---|---|
-//! | PA0–PA4 | IR sensors at −40°, −20°, 0°, +20°, +40° (ADC1 IN0–IN4, 3.3 V reference) |
+//! | PA0, PA1, PA4, PB0, PB1 | IR sensors at −40°, −20°, 0°, +20°, +40° (ADC1 IN0, IN1, IN4, IN8, IN9; 3.3 V reference) |
 //! | PA6, PA7 | left, right motor PWM (TIM3 CH1, CH2, 20 kHz) → TB6612FNG PWMA, PWMB |
 //! | PB12, PB13 | left motor direction → AIN1, AIN2 |
 //! | PB14, PB15 | right motor direction → BIN1, BIN2 |
@@ -12,6 +12,11 @@
 //! | SWDIO, SWCLK | probe-rs: flashing and defmt logs over RTT |
 //!
 //! The GP2Y0A21 outputs up to 3.1 V: within the 3.3 V ADC range, no divider.
+//! Not PA2/PA3: on a Nucleo-64 they are wired to the ST-LINK's virtual COM
+//! port (solder bridges SB13/SB14, closed as shipped), whose TX would drive
+//! a sensor's input. On the Nucleo, PA0, PA1, PA4 and PB0 are the Arduino
+//! header's A0–A3 (the Uno's sensor pins) and PB1 is on CN10; on the Black
+//! Pill all five are on its pin headers.
 
 use core::fmt::Write as _;
 use cortex_m::peripheral::syst::SystClkSource;
@@ -45,9 +50,9 @@ pub fn run() -> ! {
         (
             gpioa.pa0.into_analog(),
             gpioa.pa1.into_analog(),
-            gpioa.pa2.into_analog(),
-            gpioa.pa3.into_analog(),
             gpioa.pa4.into_analog(),
+            gpiob.pb0.into_analog(),
+            gpiob.pb1.into_analog(),
         ),
     );
 
