@@ -1,14 +1,16 @@
 //! Benchmarks: many scenarios in parallel, one JSON line and one table row
-//! per run, totals at the end.
+//! per run (and, if asked, one picture), totals at the end.
 
 use crate::reference;
 use crate::scenario::{Scenario, ScenarioError};
 use crate::sim::{self, Outcome, SimConfig};
+use crate::svg;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
 use std::fmt::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
 
 /// One run's figures (also the `--json` line).
 #[derive(Clone, Debug, Serialize)]
@@ -63,10 +65,57 @@ pub fn run_all(
     cfg: &SimConfig,
     progress: bool,
 ) -> Result<Vec<Row>, ScenarioError> {
-    let scenarios: Vec<(PathBuf, Scenario)> = files
+    let scenarios = load_all(files)?;
+    Ok(run_loaded(&scenarios, cfg, progress, None).0)
+}
+
+/// [`run_all`], also writing a picture of every run into the folder
+/// `pictures` (made if need be) as `<file stem>-<planner>-seed<N>.svg`,
+/// the same picture as `run --svg`. Two files with the same stem would
+/// overwrite each other's pictures: that is an error before anything runs,
+/// as a bad file is.
+pub fn run_all_pictured(
+    files: &[PathBuf],
+    cfg: &SimConfig,
+    progress: bool,
+    pictures: &Path,
+) -> Result<Vec<Row>, String> {
+    let scenarios = load_all(files).map_err(|e| e.to_string())?;
+    let mut stems: Vec<(&std::ffi::OsStr, &PathBuf)> = scenarios
+        .iter()
+        .map(|(f, _)| (f.file_stem().unwrap_or_default(), f))
+        .collect();
+    stems.sort();
+    if let Some(w) = stems.windows(2).find(|w| w[0].0 == w[1].0) {
+        return Err(format!(
+            "{} and {}: two scenario files with one name, their pictures would overwrite each other",
+            w[0].1.display(),
+            w[1].1.display()
+        ));
+    }
+    std::fs::create_dir_all(pictures).map_err(|e| format!("{}: {e}", pictures.display()))?;
+    let (rows, failed) = run_loaded(&scenarios, cfg, progress, Some(pictures));
+    match failed {
+        Some(e) => Err(e),
+        None => Ok(rows),
+    }
+}
+
+fn load_all(files: &[PathBuf]) -> Result<Vec<(PathBuf, Scenario)>, ScenarioError> {
+    files
         .iter()
         .map(|f| Scenario::load(f).map(|s| (f.clone(), s)))
-        .collect::<Result<_, _>>()?;
+        .collect()
+}
+
+/// The runs, sorted by file, and the first picture that could not be
+/// written.
+fn run_loaded(
+    scenarios: &[(PathBuf, Scenario)],
+    cfg: &SimConfig,
+    progress: bool,
+    pictures: Option<&Path>,
+) -> (Vec<Row>, Option<String>) {
     let bar = if progress {
         ProgressBar::new(scenarios.len() as u64)
     } else {
@@ -76,11 +125,31 @@ pub fn run_all(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed_precise} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    let failed: Mutex<Option<String>> = Mutex::new(None);
     let mut rows: Vec<Row> = scenarios
         .par_iter()
         .map(|(file, sc)| {
-            let refl = reference::shortest_path(sc).map(|r| r.length);
+            let refp = reference::shortest_path(sc);
+            let refl = refp.as_ref().map(|r| r.length);
             let res = sim::run(sc, cfg, refl);
+            if let Some(dir) = pictures {
+                let stem = file.file_stem().unwrap_or_default().to_string_lossy();
+                let out = dir.join(format!(
+                    "{stem}-{}-seed{}.svg",
+                    cfg.planner.name(),
+                    cfg.seed
+                ));
+                let pic = svg::render(
+                    sc,
+                    &res,
+                    cfg.planner.name(),
+                    refp.as_ref().map(|r| r.path.as_slice()),
+                );
+                if let Err(e) = std::fs::write(&out, pic) {
+                    let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
+                    f.get_or_insert_with(|| format!("{}: {e}", out.display()));
+                }
+            }
             bar.inc(1);
             Row {
                 name: sc.name.clone(),
@@ -99,7 +168,7 @@ pub fn run_all(
         .collect();
     bar.finish_and_clear();
     rows.sort_by(|a, b| a.file.cmp(&b.file));
-    Ok(rows)
+    (rows, failed.into_inner().unwrap_or_else(|p| p.into_inner()))
 }
 
 /// Totals over rows.

@@ -64,6 +64,10 @@ enum Cmd {
         /// Write one JSON object per run.
         #[arg(long)]
         json: Option<PathBuf>,
+        /// Write a picture of every run into this folder, as
+        /// `<file stem>-<planner>-seed<N>.svg`.
+        #[arg(long, value_name = "DIR")]
+        svg: Option<PathBuf>,
         /// Totals only.
         #[arg(long)]
         summary: bool,
@@ -193,6 +197,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             seeds,
             jobs,
             json,
+            svg: pictures,
             summary,
             perfect,
         } => {
@@ -218,7 +223,10 @@ fn real_main(cli: Cli) -> Result<(), String> {
                     sensors: sensors(perfect),
                     ..SimConfig::default()
                 };
-                let mut these = bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?;
+                let mut these = match &pictures {
+                    Some(dir) => bench::run_all_pictured(&files, &cfg, true, dir)?,
+                    None => bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?,
+                };
                 if seeds > 1 {
                     say(&format!("seed {seed}: {}", bench::table(&these, true)))?;
                 }

@@ -130,3 +130,76 @@ fn gen_count_zero_is_a_usage_error() {
     assert!(!out.status.success());
     assert!(String::from_utf8_lossy(&out.stderr).contains("--count"));
 }
+
+/// `bench --svg DIR` writes one picture per run, named by file, planner and
+/// seed, each the picture `run --svg` draws of the same run.
+#[test]
+fn bench_draws_every_run_as_run_does() {
+    let dir = std::env::temp_dir().join(format!("sim-host-pictures-{}", std::process::id()));
+    let pictures = dir.join("pictures");
+    let two_obstacles =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/traps/two-obstacles.toml");
+    sim_host(
+        &["bench", "--seed", "2", "--seeds", "2", "--summary", "--svg"],
+        &[&pictures, &corridor(), &two_obstacles],
+    );
+    let mut names: Vec<String> = std::fs::read_dir(&pictures)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(
+        names,
+        [
+            "corridor-eapf-seed2.svg",
+            "corridor-eapf-seed3.svg",
+            "two-obstacles-eapf-seed2.svg",
+            "two-obstacles-eapf-seed3.svg"
+        ]
+    );
+    for (file, seed) in [(corridor(), "2"), (two_obstacles.clone(), "3")] {
+        let alone = dir.join("alone.svg");
+        sim_host(&["run", "--seed", seed, "--svg"], &[&alone, &file]);
+        let stem = file.file_stem().unwrap().to_string_lossy().into_owned();
+        let benched = pictures.join(format!("{stem}-eapf-seed{seed}.svg"));
+        let (a, b) = (
+            std::fs::read_to_string(&alone).unwrap(),
+            std::fs::read_to_string(&benched).unwrap(),
+        );
+        assert!(a.starts_with("<svg"), "{a:.40}");
+        assert_eq!(
+            a, b,
+            "{stem}, seed {seed}: bench and run draw the run alike"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Two scenario files with one name would overwrite each other's pictures:
+/// refused before anything runs, naming both.
+#[test]
+fn bench_pictures_of_two_files_with_one_name_are_refused() {
+    let dir = std::env::temp_dir().join(format!("sim-host-same-name-{}", std::process::id()));
+    let other = dir.join("elsewhere");
+    std::fs::create_dir_all(&other).unwrap();
+    let copy = other.join("corridor.toml");
+    std::fs::copy(corridor(), &copy).unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["bench", "--svg"])
+        .arg(dir.join("pictures"))
+        .arg(corridor())
+        .arg(&copy)
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("overwrite") && err.contains("elsewhere"),
+        "{err}"
+    );
+    assert!(
+        !dir.join("pictures").exists(),
+        "nothing ran, no folder made"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
