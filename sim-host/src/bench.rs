@@ -282,3 +282,108 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
     );
     s
 }
+
+/// The planners side by side: one row of [`totals`] per planner, in the
+/// order they first appear in `rows`, and the mean path ratio over the runs
+/// (scenario and seed) that every planner reached, a fair comparison where
+/// they reach different runs (a planner that reaches only easy goals has a
+/// low ratio over its own).
+pub fn comparison(rows: &[Row]) -> String {
+    let mut planners: Vec<&str> = Vec::new();
+    for r in rows {
+        if !planners.contains(&r.planner.as_str()) {
+            planners.push(&r.planner);
+        }
+    }
+    let reached_by = |r: &Row, p: &str| {
+        rows.iter()
+            .any(|o| o.planner == p && o.file == r.file && o.seed == r.seed && o.ratio().is_some())
+    };
+    let common = |r: &Row| planners.iter().all(|p| reached_by(r, p));
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "| planner | runs | reached | collisions | unreachable (of unsolvable) | timeouts | mean path ratio | within 1.25x | ratio where all reached |"
+    );
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    for p in planners.iter().copied() {
+        let theirs: Vec<Row> = rows.iter().filter(|r| r.planner == p).cloned().collect();
+        let t = totals(&theirs);
+        let shared: Vec<f64> = theirs
+            .iter()
+            .filter(|r| common(r))
+            .filter_map(Row::ratio)
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {p} | {} | {}/{} | {} | {} ({}/{}) | {} | {} | {}/{} | {} ({} runs) |",
+            t.runs,
+            t.reached,
+            t.solvable,
+            t.collisions,
+            t.unreachable,
+            t.unreachable_correct,
+            t.runs - t.solvable,
+            t.timeouts,
+            t.mean_ratio
+                .map(|r| format!("{r:.3}"))
+                .unwrap_or_else(|| "–".into()),
+            t.within_125,
+            t.reached,
+            if shared.is_empty() {
+                "–".to_string()
+            } else {
+                format!("{:.3}", shared.iter().sum::<f64>() / shared.len() as f64)
+            },
+            shared.len()
+        );
+    }
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn row(planner: &str, file: &str, seed: u64, outcome: Outcome, path_length: f64) -> Row {
+        Row {
+            name: file.into(),
+            planner: planner.into(),
+            outcome,
+            steps: 10,
+            path_length,
+            reference_length: Some(1.0),
+            min_clearance: 0.1,
+            virtual_obstacles: 0,
+            solvable: true,
+            file: file.into(),
+            seed,
+        }
+    }
+
+    /// The last column compares the planners on the runs all of them
+    /// reached: `b` reached only the easy run, so its own mean is low, but
+    /// on the shared run `a` is the shorter.
+    #[test]
+    fn the_comparison_ratio_is_over_the_runs_every_planner_reached() {
+        let rows = [
+            row("a", "easy", 1, Outcome::Reached, 1.1),
+            row("a", "hard", 1, Outcome::Reached, 3.0),
+            row("b", "easy", 1, Outcome::Reached, 1.2),
+            row("b", "hard", 1, Outcome::Timeout, 9.0),
+            row("a", "easy", 2, Outcome::Reached, 1.3),
+            row("b", "easy", 2, Outcome::Reached, 1.5),
+        ];
+        let table = comparison(&rows);
+        let lines: Vec<&str> = table.lines().collect();
+        assert_eq!(lines.len(), 4, "{table}");
+        assert_eq!(
+            lines[2],
+            "| a | 3 | 3/3 | 0 | 0 (0/0) | 0 | 1.800 | 1/3 | 1.200 (2 runs) |"
+        );
+        assert_eq!(
+            lines[3],
+            "| b | 3 | 2/3 | 0 | 0 (0/0) | 1 | 1.350 | 1/2 | 1.350 (2 runs) |"
+        );
+    }
+}

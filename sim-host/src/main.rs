@@ -47,9 +47,11 @@ enum Cmd {
         /// Files or folders.
         #[arg(required = true)]
         paths: Vec<PathBuf>,
-        /// Planner.
-        #[arg(long, value_enum, default_value = "eapf")]
-        planner: PlannerKind,
+        /// Planner; several (`--planner eapf,apf,route` or the option
+        /// repeated) run the same scenarios and seeds each, and end with a
+        /// table comparing them.
+        #[arg(long, value_enum, default_value = "eapf", value_delimiter = ',')]
+        planner: Vec<PlannerKind>,
         /// Seed (the first one with `--seeds`).
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -215,27 +217,48 @@ fn real_main(cli: Cli) -> Result<(), String> {
             if files.is_empty() {
                 return Err("no scenario files found".into());
             }
+            let mut planners = planner;
+            planners.dedup();
+            let several = planners.len() > 1;
             let mut rows = Vec::new();
-            for seed in seed..seed.saturating_add(seeds) {
-                let cfg = SimConfig {
-                    planner,
-                    seed,
-                    sensors: sensors(perfect),
-                    ..SimConfig::default()
+            for planner in &planners {
+                // Several planners: each line says whose it is.
+                let who = if several {
+                    format!("{} ", planner.name())
+                } else {
+                    String::new()
                 };
-                let mut these = match &pictures {
-                    Some(dir) => bench::run_all_pictured(&files, &cfg, true, dir)?,
-                    None => bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?,
-                };
-                if seeds > 1 {
-                    say(&format!("seed {seed}: {}", bench::table(&these, true)))?;
+                let mut theirs = Vec::new();
+                for seed in seed..seed.saturating_add(seeds) {
+                    let cfg = SimConfig {
+                        planner: *planner,
+                        seed,
+                        sensors: sensors(perfect),
+                        ..SimConfig::default()
+                    };
+                    let mut these = match &pictures {
+                        Some(dir) => bench::run_all_pictured(&files, &cfg, true, dir)?,
+                        None => bench::run_all(&files, &cfg, true).map_err(|e| e.to_string())?,
+                    };
+                    if seeds > 1 {
+                        say(&format!("{who}seed {seed}: {}", bench::table(&these, true)))?;
+                    }
+                    theirs.append(&mut these);
                 }
-                rows.append(&mut these);
+                if seeds > 1 {
+                    say(&format!("{who}all seeds: {}", bench::table(&theirs, true)))?;
+                } else {
+                    let t = bench::table(&theirs, summary);
+                    say(&if several && summary {
+                        format!("{who}{t}")
+                    } else {
+                        t
+                    })?;
+                }
+                rows.append(&mut theirs);
             }
-            if seeds > 1 {
-                say(&format!("all seeds: {}", bench::table(&rows, true)))?;
-            } else {
-                say(&bench::table(&rows, summary))?;
+            if several {
+                say(&format!("\n{}", bench::comparison(&rows)))?;
             }
             if let Some(out) = json {
                 let lines: Vec<String> = rows

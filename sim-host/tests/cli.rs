@@ -203,3 +203,44 @@ fn bench_pictures_of_two_files_with_one_name_are_refused() {
     );
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Several planners in one bench: each one's summary says whose it is, a
+/// table compares them, and the JSON lines carry each run's planner.
+#[test]
+fn bench_compares_several_planners() {
+    let dir = std::env::temp_dir().join(format!("sim-host-planners-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let json = dir.join("runs.jsonl");
+    let text = sim_host(
+        &[
+            "bench",
+            "--planner",
+            "eapf,apf",
+            "--planner",
+            "route",
+            "--summary",
+            "--json",
+        ],
+        &[&json, &corridor()],
+    );
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("eapf runs 1 |"), "{text}");
+    assert!(lines[1].starts_with("apf runs 1 |"), "{text}");
+    assert!(lines[2].starts_with("route runs 1 |"), "{text}");
+    assert!(lines[4].starts_with("| planner |"), "{text}");
+    for (line, p) in lines[6..9].iter().zip(["eapf", "apf", "route"]) {
+        assert!(line.starts_with(&format!("| {p} | 1 |")), "{text}");
+    }
+    let planners: Vec<String> = std::fs::read_to_string(&json)
+        .unwrap()
+        .lines()
+        .map(|l| {
+            serde_json::from_str::<serde_json::Value>(l).unwrap()["planner"]
+                .as_str()
+                .unwrap()
+                .to_string()
+        })
+        .collect();
+    assert_eq!(planners, ["eapf", "apf", "route"]);
+    std::fs::remove_dir_all(&dir).ok();
+}
