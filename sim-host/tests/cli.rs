@@ -22,11 +22,26 @@ fn sim_host(args: &[&str], paths: &[&Path]) -> String {
     String::from_utf8(out.stdout).unwrap()
 }
 
-#[test]
-fn bench_over_several_seeds_prints_each_and_the_aggregate() {
-    let dir = std::env::temp_dir().join(format!("sim-host-cli-{}", std::process::id()));
+/// A fresh scratch folder for one test, and the JSON-lines file in it.
+fn scratch(name: &str) -> (PathBuf, PathBuf) {
+    let dir = std::env::temp_dir().join(format!("sim-host-{name}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let json = dir.join("runs.jsonl");
+    (dir, json)
+}
+
+/// Field `key` of every line of a `--json` file.
+fn json_field(json: &Path, key: &str) -> Vec<serde_json::Value> {
+    std::fs::read_to_string(json)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str::<serde_json::Value>(l).unwrap()[key].clone())
+        .collect()
+}
+
+#[test]
+fn bench_over_several_seeds_prints_each_and_the_aggregate() {
+    let (dir, json) = scratch("cli");
     let text = sim_host(
         &["bench", "--seed", "4", "--seeds", "2", "--json"],
         &[&json, &corridor()],
@@ -36,16 +51,7 @@ fn bench_over_several_seeds_prints_each_and_the_aggregate() {
     assert!(lines[0].starts_with("seed 4: runs 1 |"), "{text}");
     assert!(lines[1].starts_with("seed 5: runs 1 |"), "{text}");
     assert!(lines[2].starts_with("all seeds: runs 2 |"), "{text}");
-    let seeds: Vec<u64> = std::fs::read_to_string(&json)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<serde_json::Value>(l).unwrap()["seed"]
-                .as_u64()
-                .unwrap()
-        })
-        .collect();
-    assert_eq!(seeds, [4, 5]);
+    assert_eq!(json_field(&json, "seed"), [4, 5]);
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -208,9 +214,7 @@ fn bench_pictures_of_two_files_with_one_name_are_refused() {
 /// table compares them, and the JSON lines carry each run's planner.
 #[test]
 fn bench_compares_several_planners() {
-    let dir = std::env::temp_dir().join(format!("sim-host-planners-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let json = dir.join("runs.jsonl");
+    let (dir, json) = scratch("planners");
     let text = sim_host(
         &[
             "bench",
@@ -231,16 +235,6 @@ fn bench_compares_several_planners() {
     for (line, p) in lines[6..9].iter().zip(["eapf", "apf", "route"]) {
         assert!(line.starts_with(&format!("| {p} | 1 |")), "{text}");
     }
-    let planners: Vec<String> = std::fs::read_to_string(&json)
-        .unwrap()
-        .lines()
-        .map(|l| {
-            serde_json::from_str::<serde_json::Value>(l).unwrap()["planner"]
-                .as_str()
-                .unwrap()
-                .to_string()
-        })
-        .collect();
-    assert_eq!(planners, ["eapf", "apf", "route"]);
+    assert_eq!(json_field(&json, "planner"), ["eapf", "apf", "route"]);
     std::fs::remove_dir_all(&dir).ok();
 }
