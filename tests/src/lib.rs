@@ -248,6 +248,25 @@ pub fn mean_worst(v: &[u32]) -> (u32, u32) {
     (mean, worst)
 }
 
+/// Section sizes (text, data, bss) as `cargo size --release ARGS…` prints
+/// them in the firmware workspace `dir` (cargo-binutils; the firmware
+/// READMEs' command).
+pub fn cargo_size(dir: &Path, args: &[&str]) -> (u32, u32, u32) {
+    let out = clean_cargo(dir)
+        .args(["size", "--release", "--quiet"])
+        .args(args)
+        .output()
+        .expect("cargo size (cargo install cargo-binutils)");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(
+        out.status.success(),
+        "cargo size in {}: {}",
+        dir.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    parse_size(&text).unwrap_or_else(|| panic!("cargo size output: {text}"))
+}
+
 /// `(text, data, bss)` from the Berkeley-format output of `size` or
 /// `llvm-size` (second line, first three columns).
 pub fn parse_size(output: &str) -> Option<(u32, u32, u32)> {

@@ -12,7 +12,7 @@
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, ram_used, Avr, RAM_BYTES};
-use rover_tests::{clean_cargo, mean_worst, repo_root, standard_traces, Trace};
+use rover_tests::{cargo_size, clean_cargo, mean_worst, repo_root, standard_traces, Trace};
 use std::sync::OnceLock;
 
 /// Worst planner step allowed, cycles (issue 5's budget).
@@ -245,4 +245,21 @@ fn ravedude_opens_the_console_at_the_firmware_rate() {
         (firmware - console).abs() / console < 0.025,
         "the firmware speaks {firmware:.0} baud, ravedude listens at {console:.0}"
     );
+}
+
+/// The firmware README's size command, `cargo size --release --bin
+/// firmware-avr` (cargo-binutils with llvm-tools), reads the sizes the
+/// tests and `avr-report` read with avr-size.
+#[test]
+fn cargo_size_reports_the_firmware_sizes() {
+    let elf = firmware_elf();
+    let sizes = cargo_size(
+        &repo_root().join("firmware-avr"),
+        &["--bin", "firmware-avr"],
+    );
+    println!(
+        "cargo size: text={} data={} bss={}",
+        sizes.0, sizes.1, sizes.2
+    );
+    assert_eq!(sizes, elf_size(&elf), "cargo size against avr-size");
 }

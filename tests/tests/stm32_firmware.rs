@@ -5,7 +5,7 @@
 
 use planner_core::AdcProfile;
 use rover_tests::stm32::{board_elf, elf_size, instructions, run_traces};
-use rover_tests::{mean_worst, standard_traces};
+use rover_tests::{cargo_size, mean_worst, repo_root, standard_traces};
 use std::sync::OnceLock;
 
 /// Worst planner step allowed, instructions (issue 6).
@@ -65,4 +65,13 @@ fn board_build_within_size_budget() {
     // panic messages (23,180 bytes now): hold it.
     assert!(text <= 24 * 1024, "text {text} > the 24 KiB aim");
     assert!(data + bss <= 16 * 1024, "data + bss {} > 16 KB", data + bss);
+}
+
+/// The firmware README's size command, `cargo size --release`, reads the
+/// board build's sizes as `stm32-report` does.
+#[test]
+fn cargo_size_reports_the_board_build() {
+    let elf = board_elf();
+    let sizes = cargo_size(&repo_root().join("firmware-stm32"), &[]);
+    assert_eq!(sizes, elf_size(&elf), "cargo size against llvm-size");
 }

@@ -84,7 +84,7 @@ fn ensure_tools() {
         "rustup",
         &["component", "list", "--installed", "--toolchain", "stable"],
     );
-    for c in ["rustfmt", "clippy"] {
+    for c in ["rustfmt", "clippy", "llvm-tools"] {
         if !comps.contains(c) {
             run(
                 &dir,
@@ -104,7 +104,7 @@ fn ensure_tools() {
         );
         exit(1);
     }
-    for c in ["rust-src"] {
+    for c in ["rust-src", "llvm-tools"] {
         if !nightly.contains(c) {
             run(
                 &dir,
@@ -113,6 +113,16 @@ fn ensure_tools() {
                 &[],
             );
         }
+    }
+    // `cargo size` reads the firmware images' sizes (the firmware READMEs'
+    // command; the tests check it against avr-size and llvm-size).
+    if output("cargo", &["size", "--version"]).is_empty() {
+        run(
+            &dir,
+            "cargo",
+            &["+stable", "install", "--locked", "cargo-binutils"],
+            &[],
+        );
     }
     // defmt-print decodes the emulated STM32 firmware's log.
     if output("defmt-print", &["--version"]).is_empty() {
