@@ -248,22 +248,29 @@ pub fn mean_worst(v: &[u32]) -> (u32, u32) {
     (mean, worst)
 }
 
+/// `cargo ARGS…` in the workspace `dir` (see [`clean_cargo`]), which must
+/// succeed: its standard output.
+pub fn cargo_stdout(dir: &Path, args: &[&str]) -> String {
+    let out = clean_cargo(dir)
+        .args(args)
+        .output()
+        .unwrap_or_else(|e| panic!("cargo {args:?}: {e}"));
+    assert!(
+        out.status.success(),
+        "cargo {args:?} in {}: {}",
+        dir.display(),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    String::from_utf8_lossy(&out.stdout).into_owned()
+}
+
 /// Section sizes (text, data, bss) as `cargo size --release ARGS…` prints
 /// them in the firmware workspace `dir` (cargo-binutils; the firmware
 /// READMEs' command).
 pub fn cargo_size(dir: &Path, args: &[&str]) -> (u32, u32, u32) {
-    let out = clean_cargo(dir)
-        .args(["size", "--release", "--quiet"])
-        .args(args)
-        .output()
-        .expect("cargo size (cargo install cargo-binutils)");
-    let text = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "cargo size in {}: {}",
-        dir.display(),
-        String::from_utf8_lossy(&out.stderr)
-    );
+    let mut all = vec!["size", "--release", "--quiet"];
+    all.extend_from_slice(args);
+    let text = cargo_stdout(dir, &all);
     parse_size(&text).unwrap_or_else(|| panic!("cargo size output: {text}"))
 }
 

@@ -12,7 +12,7 @@
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, ram_used, Avr, RAM_BYTES};
-use rover_tests::{cargo_size, clean_cargo, mean_worst, repo_root, standard_traces, Trace};
+use rover_tests::{cargo_size, cargo_stdout, mean_worst, repo_root, standard_traces, Trace};
 use std::sync::OnceLock;
 
 /// Worst planner step allowed, cycles (issue 5's budget).
@@ -203,16 +203,15 @@ fn cargo_run_flashes_the_firmware() {
     // The README's flash command, `cargo run --release` in firmware-avr,
     // must pick the firmware among the binaries (the benches need `--bin`);
     // the runner (ravedude) replaced by `echo`, which prints the ELF path.
-    let out = clean_cargo(&repo_root().join("firmware-avr"))
-        .args(["run", "--release", "--quiet", "--config"])
-        .arg("target.avr-none.runner = \"echo\"")
-        .output()
-        .expect("run cargo for firmware-avr");
-    let stdout = String::from_utf8_lossy(&out.stdout);
-    assert!(
-        out.status.success(),
-        "cargo run failed: {}",
-        String::from_utf8_lossy(&out.stderr)
+    let stdout = cargo_stdout(
+        &repo_root().join("firmware-avr"),
+        &[
+            "run",
+            "--release",
+            "--quiet",
+            "--config",
+            "target.avr-none.runner = \"echo\"",
+        ],
     );
     assert!(stdout.trim().ends_with("firmware-avr.elf"), "ran {stdout}");
 }
