@@ -58,7 +58,10 @@ fn timed(overhead: u32, f: &mut dyn FnMut() -> (i32, i32)) -> ((i32, i32), u32) 
     let r = black_box(f());
     compiler_fence(Ordering::SeqCst);
     let t1 = clock::stamp();
-    (r, t1.cycles().wrapping_sub(t0.cycles()).wrapping_sub(overhead))
+    (
+        r,
+        t1.cycles().wrapping_sub(t0.cycles()).wrapping_sub(overhead),
+    )
 }
 
 /// One result line.

@@ -102,7 +102,10 @@ impl replay::Replay for FloatReplay<'_> {
             heading: Angle((fh * (65_536.0 / TAU)) as i32 as u16),
             step_mm: fs as u16,
         };
-        (Output { command, status }, t1.cycles().wrapping_sub(t0.cycles()))
+        (
+            Output { command, status },
+            t1.cycles().wrapping_sub(t0.cycles()),
+        )
     }
 }
 
