@@ -9,10 +9,13 @@
 //! | `M` | report memory | `M stack_peak=<bytes>` |
 //! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below | `OK` |
 //!
-//! Anything else gets `ERR`. Telemetry, one line per planner step:
+//! Anything else gets `ERR`. Telemetry (the AVR's; the STM32 logs over
+//! defmt instead), one line per planner step:
 //! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
 //! with headings in binary angle units (65,536 = 360°) and status one of
-//! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault).
+//! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault);
+//! `cycles` is the step as it ran, the interrupts that came during it
+//! included.
 //!
 //! Replay mode (for bit-exactness and cycle counts from a recorded trace):
 //! the host sends frames of `0xA5`, the number `n` (u8, at most 8) of the
@@ -25,7 +28,8 @@
 //! verdicts (u8, bit `i` set if sample `i` said stop), the cycles of its
 //! costliest look (u32). A frame starting
 //! with any other byte ends replay mode (`OK`). Motors, ADC sampling and the
-//! control tick are off during replay so that nothing interrupts the step.
+//! control tick are off during replay, and the firmware runs each guard
+//! look and step with interrupts off, so that their cycles are theirs alone.
 
 /// One parsed command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
