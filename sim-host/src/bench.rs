@@ -8,6 +8,7 @@ use crate::svg;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::Serialize;
+use std::collections::HashMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -295,11 +296,12 @@ pub fn comparison(rows: &[Row]) -> String {
             planners.push(&r.planner);
         }
     }
-    let reached_by = |r: &Row, p: &str| {
-        rows.iter()
-            .any(|o| o.planner == p && o.file == r.file && o.seed == r.seed && o.ratio().is_some())
-    };
-    let common = |r: &Row| planners.iter().all(|p| reached_by(r, p));
+    // How many planners reached each run (file and seed).
+    let mut reached: HashMap<(&Path, u64), usize> = HashMap::new();
+    for r in rows.iter().filter(|r| r.ratio().is_some()) {
+        *reached.entry((r.file.as_path(), r.seed)).or_default() += 1;
+    }
+    let common = |r: &Row| reached.get(&(r.file.as_path(), r.seed)) == Some(&planners.len());
     let mut s = String::new();
     let _ = writeln!(
         s,

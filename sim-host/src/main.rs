@@ -217,8 +217,13 @@ fn real_main(cli: Cli) -> Result<(), String> {
             if files.is_empty() {
                 return Err("no scenario files found".into());
             }
-            let mut planners = planner;
-            planners.dedup();
+            // Each planner once, in the order given.
+            let mut planners: Vec<PlannerKind> = Vec::new();
+            for p in planner {
+                if !planners.contains(&p) {
+                    planners.push(p);
+                }
+            }
             let several = planners.len() > 1;
             let mut rows = Vec::new();
             for planner in &planners {

@@ -211,7 +211,8 @@ fn bench_pictures_of_two_files_with_one_name_are_refused() {
 }
 
 /// Several planners in one bench: each one's summary says whose it is, a
-/// table compares them, and the JSON lines carry each run's planner.
+/// table compares them, and the JSON lines carry each run's planner; a
+/// planner named twice runs once.
 #[test]
 fn bench_compares_several_planners() {
     let (dir, json) = scratch("planners");
@@ -221,7 +222,7 @@ fn bench_compares_several_planners() {
             "--planner",
             "eapf,apf",
             "--planner",
-            "route",
+            "route,eapf",
             "--summary",
             "--json",
         ],

@@ -67,12 +67,12 @@ impl Math<f32> for AvrLibc {
     }
 }
 
-/// The float step behind the replay protocol. Its steps are timed with
-/// interrupts on, unlike the firmware's: they run longer than the 65,536
-/// cycles between two Timer1 overflows, which only the overflow interrupt
-/// counts, so each overflow's 47 cycles are in a float step's count. It has no flank points
+/// The float step behind the replay protocol. It has no flank points
 /// (planner-float is the EAPF step alone), so the guard's samples only
-/// need an answer.
+/// need an answer. Its steps are timed with interrupts on, unlike the
+/// firmware's: they run longer than the 65,536 cycles between two Timer1
+/// overflows, which only the overflow interrupt counts, so each overflow's
+/// 47 cycles are in a float step's count.
 struct FloatReplay<'a> {
     planner: FloatPlanner<f32, AvrLibc>,
     cfg: &'a Config,
