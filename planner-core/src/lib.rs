@@ -155,6 +155,15 @@ pub struct Planner {
     escape: escape::Escape,
     /// Boundary following after the escape gave up (see `follow`).
     follow: follow::Follow,
+    /// Ours (the wedge): where the run of advances along one heading (within
+    /// 1°) that brought the rover here started ([`NOWHERE`] if none), that heading,
+    /// and the heading of the last step commanded.
+    came_from: Point,
+    came_heading: Angle,
+    stepped_heading: Angle,
+    /// This cycle's step backs out along the way the rover came: the guard
+    /// lets it go (see the wedge rule in [`Planner::step_raw`]).
+    backing_out: bool,
 }
 
 // The fields before the fold-back filter are the ones the step reads and
@@ -188,6 +197,10 @@ impl Planner {
             kept_goal: None,
             kept_midpoint: None,
             flank: command::Flank::default(),
+            came_from: NOWHERE,
+            came_heading: Angle::ZERO,
+            stepped_heading: Angle::ZERO,
+            backing_out: false,
         }
     }
 
@@ -207,6 +220,8 @@ impl Planner {
         self.spun = false;
         self.turned_in_place = 0;
         self.stepped_from = NOWHERE;
+        self.came_from = NOWHERE;
+        self.backing_out = false;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
         self.looped_once = false;
@@ -274,6 +289,10 @@ impl Planner {
         let stepped = self.stepped_from != NOWHERE;
         let stopped = stepped && box_within(pose.position, self.stepped_from, SPOT_MM);
         let moved = stepped && !stopped;
+        self.backing_out = false;
+        if moved {
+            self.note_advance();
+        }
         // Held on this spot for three full turns: the fold-back filter
         // compares each sensor with the one that looked its way the cycle
         // before (see `FoldBackFilter`).
@@ -312,6 +331,18 @@ impl Planner {
         if self.unreachable {
             return stop(Status::Unreachable);
         }
+        // Ours (the wedge): four full turns on the spot without a step. In a
+        // pocket whose walls are nearer than the sensors' minimum range,
+        // every heading has a beam in the disc's way that reads too close,
+        // so no heading is ever free (docs/bench.md, "The wedge"). The way
+        // the rover came in is: the disc has just swept it. Back out along
+        // it, once, and let the guard trust it.
+        if !moved && self.turned_in_place >= 4 * FULL_TURN {
+            if let Some(out) = self.back_out(robot) {
+                return out;
+            }
+        }
+        let readings = &self.last_readings;
         // Ours: once the escape gives up, boundary following (the `follow`
         // module) instead of reporting the goal unreachable at once; the
         // potential field is not used again for this goal.
@@ -534,6 +565,42 @@ impl Planner {
         self.command(robot, heading, step)
     }
 
+    /// The last step moved the rover: it extends the run of advances along
+    /// one heading (within 1°: the straight way back then stays within
+    /// 9 mm a metre of the way driven), or starts a new one where it began
+    /// (the wedge rule's way back). Out of line: a few cycles, off the
+    /// step's costliest path.
+    #[inline(never)]
+    fn note_advance(&mut self) {
+        let along = self.came_from != NOWHERE
+            && self.stepped_heading.sub(self.came_heading).abs_signed() <= Angle::from_deg(1).0;
+        if !along {
+            self.came_from = self.stepped_from;
+            self.came_heading = self.stepped_heading;
+        }
+    }
+
+    /// The wedge rule's step: back to where the run of advances that
+    /// brought the rover here began, once (`None` if there is none, or it
+    /// is nearer than a step).
+    #[cold]
+    #[inline(never)]
+    fn back_out(&mut self, robot: Point) -> Option<Output> {
+        if self.came_from == NOWHERE {
+            return None;
+        }
+        let (dx, dy) = robot.to(self.came_from);
+        let back_mm = hypot(dx, dy);
+        let heading = Angle::atan2(dy, dx);
+        self.came_from = NOWHERE;
+        self.turned_in_place = 0;
+        if back_mm < self.config.min_step_mm {
+            return None;
+        }
+        self.backing_out = true;
+        Some(self.command(robot, heading, back_mm))
+    }
+
     /// Add this cycle's `turn` to the turning on the spot (restarted once a
     /// step has `moved` the rover): the pocket rule and the fold-back
     /// filter's `held` read it, while following a boundary too.
@@ -549,6 +616,7 @@ impl Planner {
     /// started with it).
     fn command(&mut self, robot: Point, heading: Angle, step_mm: u16) -> Output {
         self.stepped_from = if step_mm > 0 { robot } else { NOWHERE };
+        self.stepped_heading = heading;
         self.flank.start(heading, step_mm);
         Output {
             command: Command { heading, step_mm },
@@ -623,6 +691,10 @@ impl Planner {
         let readings = self.readings(raw);
         self.flank
             .saw(&self.config, self.stepped_from, &readings, remaining_mm);
+        if self.backing_out && !readings.contains(&Reading::Implausible) {
+            // The wedge rule's way back: the disc has just swept it.
+            return Guard::Continue;
+        }
         command::guard(&self.config, &readings, remaining_mm)
     }
 
@@ -960,6 +1032,46 @@ mod tests {
             heading = out.command.heading;
         }
         panic!("still turning on the spot after 30 cycles");
+    }
+
+    #[test]
+    fn wedged_the_rover_backs_out_the_way_it_came() {
+        // The rover advances north from (0, 0) into a pocket; at (0, 400)
+        // every sensor reads "too close" whichever way it faces, so no
+        // heading is ever free. After four full turns on the spot it backs
+        // out to where the run of advances began, along the line it came
+        // (due south), and the guard lets that step go although every beam
+        // still reads too close; the step after is guarded as ever.
+        let mut p = planner(Point::new(0, 3_000));
+        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let north = Angle::from_deg(90);
+        let out = p.step_raw(at(0, 0, 90), &[FAR; 5]).command;
+        assert!(out.step_mm >= 400, "{out:?}");
+        let mut heading = north;
+        let mut cycles = 0;
+        let back = loop {
+            let pose = Pose {
+                position: Point::new(0, 400),
+                heading,
+            };
+            let out = p.step_raw(pose, &[near; 5]).command;
+            cycles += 1;
+            if out.step_mm > 0 {
+                break out;
+            }
+            assert!(cycles < 100, "still turning after {cycles} cycles");
+            heading = out.heading;
+        };
+        assert!(
+            p.turned_in_place == 0 && cycles > 4 * 9,
+            "after {cycles} cycles"
+        );
+        assert_eq!(back.heading, Angle::from_deg(-90), "due south");
+        assert_eq!(back.step_mm, 400, "back to where the run began");
+        assert_eq!(p.guard_raw(&[near; 5], 400), Guard::Continue);
+        // Backed out: the next cycle plans and guards as before.
+        let _ = p.step_raw(at(0, 0, -90), &[near; 5]);
+        assert_eq!(p.guard_raw(&[near; 5], 100), Guard::Stop);
     }
 
     #[test]
