@@ -264,6 +264,12 @@ impl Flank {
         };
     }
 
+    /// The heading of the advance in progress (`None` while turning in
+    /// place).
+    pub(crate) fn heading(&self) -> Option<Angle> {
+        self.advance.map(|(heading, _)| heading)
+    }
+
     /// A guard sample: the advance from `from` has `remaining_mm` to go and
     /// the beams read `readings`; keep the points beside the way.
     #[inline(never)]

@@ -156,11 +156,8 @@ pub struct Planner {
     /// Boundary following after the escape gave up (see `follow`).
     follow: follow::Follow,
     /// Ours (the wedge): where the run of advances along one heading (within
-    /// 1°) that brought the rover here started ([`NOWHERE`] if none), that heading,
-    /// and the heading of the last step commanded.
-    came_from: Point,
-    came_heading: Angle,
-    stepped_heading: Angle,
+    /// 1°) that brought the rover here started, and that heading.
+    came_from: Option<(Point, Angle)>,
     /// This cycle's step backs out along the way the rover came: the guard
     /// lets it go (see the wedge rule in [`Planner::step_raw`]).
     backing_out: bool,
@@ -197,9 +194,7 @@ impl Planner {
             kept_goal: None,
             kept_midpoint: None,
             flank: command::Flank::default(),
-            came_from: NOWHERE,
-            came_heading: Angle::ZERO,
-            stepped_heading: Angle::ZERO,
+            came_from: None,
             backing_out: false,
         }
     }
@@ -220,7 +215,7 @@ impl Planner {
         self.spun = false;
         self.turned_in_place = 0;
         self.stepped_from = NOWHERE;
-        self.came_from = NOWHERE;
+        self.came_from = None;
         self.backing_out = false;
         self.paper_step_mm = self.config.sensor_range_mm;
         self.unreachable = false;
@@ -566,17 +561,22 @@ impl Planner {
     }
 
     /// The last step moved the rover: it extends the run of advances along
-    /// one heading (within 1°: the straight way back then stays within
-    /// 9 mm a metre of the way driven), or starts a new one where it began
-    /// (the wedge rule's way back). Out of line: a few cycles, off the
-    /// step's costliest path.
+    /// one heading (within 1°: every point driven and the run's end then
+    /// lie in a 1° cone round that heading, so the straight way back stays
+    /// within sin 2°, 3.5 %, of the run's length of the way driven), or
+    /// starts a new one where it began (the wedge rule's way back). The
+    /// step's heading is the guard's (`Flank`). Out of line: a few cycles,
+    /// off the step's costliest path.
     #[inline(never)]
     fn note_advance(&mut self) {
-        let along = self.came_from != NOWHERE
-            && self.stepped_heading.sub(self.came_heading).abs_signed() <= Angle::from_deg(1).0;
+        let Some(heading) = self.flank.heading() else {
+            return;
+        };
+        let along = self
+            .came_from
+            .is_some_and(|(_, run)| heading.sub(run).abs_signed() <= Angle::from_deg(1).0);
         if !along {
-            self.came_from = self.stepped_from;
-            self.came_heading = self.stepped_heading;
+            self.came_from = Some((self.stepped_from, heading));
         }
     }
 
@@ -586,13 +586,10 @@ impl Planner {
     #[cold]
     #[inline(never)]
     fn back_out(&mut self, robot: Point) -> Option<Output> {
-        if self.came_from == NOWHERE {
-            return None;
-        }
-        let (dx, dy) = robot.to(self.came_from);
+        let (from, _) = self.came_from.take()?;
+        let (dx, dy) = robot.to(from);
         let back_mm = hypot(dx, dy);
         let heading = Angle::atan2(dy, dx);
-        self.came_from = NOWHERE;
         self.turned_in_place = 0;
         if back_mm < self.config.min_step_mm {
             return None;
@@ -616,7 +613,6 @@ impl Planner {
     /// started with it).
     fn command(&mut self, robot: Point, heading: Angle, step_mm: u16) -> Output {
         self.stepped_from = if step_mm > 0 { robot } else { NOWHERE };
-        self.stepped_heading = heading;
         self.flank.start(heading, step_mm);
         Output {
             command: Command { heading, step_mm },
@@ -1044,10 +1040,9 @@ mod tests {
         // still reads too close; the step after is guarded as ever.
         let mut p = planner(Point::new(0, 3_000));
         let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
-        let north = Angle::from_deg(90);
         let out = p.step_raw(at(0, 0, 90), &[FAR; 5]).command;
         assert!(out.step_mm >= 400, "{out:?}");
-        let mut heading = north;
+        let mut heading = Angle::from_deg(90);
         let mut cycles = 0;
         let back = loop {
             let pose = Pose {

@@ -233,16 +233,17 @@ fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
 /// one spot without the rule, 132.4 s with it (the escape's rocking in the
 /// same pocket before it gives up, steps of 1–6 cm); 53.0 s since the
 /// escape hands over after 200 cycles and the follower's turns count for
-/// the fold-back filter (docs/bench.md).
+/// the fold-back filter (docs/bench.md); 44.7 s with the wedge rule.
 #[test]
 fn the_boundary_follower_does_not_retake_a_refused_turn() {
     let stuck_s = longest_on_one_spot_in(117, 1);
     assert!(stuck_s < 200.0, "{stuck_s:.1} s on one spot");
 }
 
-/// Drive `generated(seed)` with seed 1 and no reference (the simulator's
-/// budget is the straight line's), print the outcome, check it is no
-/// collision, and return the longest time, s, within 5 cm of one spot.
+/// Drive `generated(seed)` with noise seed `noise_seed` and no reference
+/// (the simulator's budget is the straight line's), print the outcome,
+/// check it is no collision, and return the longest time, s, within 5 cm
+/// of one spot.
 fn longest_on_one_spot_in(seed: u64, noise_seed: u64) -> f64 {
     use sim_host::scenario::Scenario;
     let (name, text) = generated(seed);

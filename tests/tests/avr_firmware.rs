@@ -86,7 +86,7 @@ fn step_within_cycle_budget() {
 }
 
 #[test]
-#[ignore = "not met: the firmware is ~30.4 KiB (issue 5 stays open)"]
+#[ignore = "not met: the firmware is ~30.3 KiB (issue 5 stays open)"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");

@@ -49,6 +49,10 @@ fn the_profile_accounts_for_the_timed_steps() {
         .zip(&p.step_cycles)
         .map(|(&counted, &timed)| counted as i64 - i64::from(timed))
         .collect();
+    println!(
+        "avr profile: the profiled call is {} cycles more than the timed step, first step",
+        around[0]
+    );
     assert!(
         around.iter().all(|&a| a == around[0]) && (0..400).contains(&around[0]),
         "profiled minus timed cycles differ between steps: {:?}",
