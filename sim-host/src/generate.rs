@@ -1,9 +1,61 @@
-//! Random circle worlds with the EAPF paper's parameters (environment 2:
-//! 80 circles, radii 0.12–0.9 m, 17.15 m × 14.7 m), written as format 1.
+//! Random worlds, written as format 1: circle worlds with the EAPF paper's
+//! parameters (environment 2: 80 circles, radii 0.12–0.9 m, 17.15 m ×
+//! 14.7 m), and box worlds in the same arena (turned boxes and thin walls:
+//! corners at every angle, pockets and walled-in goals, which circles
+//! never make).
 
+use crate::reference::shortest_path;
+use crate::scenario::Scenario;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
+use std::f64::consts::PI;
 use std::fmt::Write;
+use std::path::Path;
+
+/// What a random world is made of.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum Kind {
+    /// 80 circles, radii 0.12–0.9 m: the EAPF paper's environment 2.
+    Circles,
+    /// 90 boxes (sides 0.15–1.5 m) and 30 thin walls (0.8–2.5 m long, 6 cm
+    /// thick), each turned at random. A goal the walls close off is
+    /// written `solvable = false`.
+    Boxes,
+}
+
+impl Kind {
+    /// File and scenario names of a set of these worlds: `<prefix>-<seed>`.
+    pub fn prefix(self) -> &'static str {
+        match self {
+            Kind::Circles => "gen",
+            Kind::Boxes => "box",
+        }
+    }
+
+    /// What the file's `description` says.
+    pub fn description(self) -> &'static str {
+        match self {
+            Kind::Circles => "random circle world with the EAPF paper's environment 2 parameters",
+            Kind::Boxes => "random world of turned boxes and thin walls in the EAPF paper's environment 2 arena",
+        }
+    }
+}
+
+/// Boxes in a box world, and their sides' range, m.
+const BOXES: usize = 90;
+const BOX_SIDES: [f64; 2] = [0.15, 1.5];
+/// Walls in a box world, their lengths' range and their thickness, m.
+const WALLS: usize = 30;
+const WALL_LENGTHS: [f64; 2] = [0.8, 2.5];
+const WALL_THICKNESS: f64 = 0.06;
+
+/// A box world's goal is written unsolvable only when the reference finds
+/// no path for a disc this much narrower (m) than the robot either: the
+/// reference's grid can miss a gap up to one cell (0.02 m) wider than the
+/// disc, so with this margin a missed way is at least 0.02 m too narrow
+/// for the robot. Worlds between the two (a way the grid may have missed)
+/// are drawn again.
+const UNSOLVABLE_MARGIN_M: f64 = 0.03;
 
 /// Parameters of a random circle world.
 #[derive(Clone, Debug)]
@@ -78,6 +130,134 @@ impl RandomWorld {
     }
 }
 
+/// The file text of a random world of `kind` in the paper's environment 2
+/// arena, named `name`, from `start` to `goal`, drawn from `seed`.
+pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64) -> String {
+    let w = RandomWorld::paper_env2(name, start, goal, seed);
+    match kind {
+        Kind::Circles => w.to_toml(kind.description()),
+        Kind::Boxes => w.boxes_toml(kind.description()),
+    }
+}
+
+impl RandomWorld {
+    /// A box world's file text ([`Kind::Boxes`]): the arena, start, goal,
+    /// robot and seed of `self`. Shapes that would come within
+    /// `robot_radius + 0.15` m of the start or goal are drawn again; so is
+    /// the whole world while the reference cannot tell whether the goal is
+    /// closed off (see [`UNSOLVABLE_MARGIN_M`]).
+    pub fn boxes_toml(&self, description: &str) -> String {
+        let mut rng = Pcg64::seed_from_u64(self.seed);
+        let keep = self.robot_radius + 0.15;
+        loop {
+            let mut body = String::new();
+            let mut n = 0;
+            while n < BOXES + WALLS {
+                let (w, h) = if n < BOXES {
+                    (
+                        rng.gen_range(BOX_SIDES[0]..=BOX_SIDES[1]),
+                        rng.gen_range(BOX_SIDES[0]..=BOX_SIDES[1]),
+                    )
+                } else {
+                    (
+                        rng.gen_range(WALL_LENGTHS[0]..=WALL_LENGTHS[1]),
+                        WALL_THICKNESS,
+                    )
+                };
+                let c = [
+                    rng.gen_range(0.0..self.size[0]),
+                    rng.gen_range(0.0..self.size[1]),
+                ];
+                let turn = rng.gen_range(0.0..PI);
+                let b = TurnedBox {
+                    c,
+                    half: [w / 2.0, h / 2.0],
+                    turn,
+                };
+                if b.distance(self.start) <= keep || b.distance(self.goal) <= keep {
+                    continue;
+                }
+                let points: Vec<String> = b
+                    .corners()
+                    .iter()
+                    .map(|p| format!("[{:.3}, {:.3}]", p[0], p[1]))
+                    .collect();
+                let _ = writeln!(body, "\n[[polygon]]\npoints = [{}]", points.join(", "));
+                n += 1;
+            }
+            let head = |solvable: bool| {
+                let mut s = String::new();
+                let _ = writeln!(s, "format = 1");
+                let _ = writeln!(s, "name = \"{}\"", self.name);
+                let _ = writeln!(s, "description = \"{description}\"");
+                let _ = writeln!(s, "bounds = [0.0, 0.0, {}, {}]", self.size[0], self.size[1]);
+                let _ = writeln!(s, "start = [{}, {}]", self.start[0], self.start[1]);
+                let _ = writeln!(s, "goal = [{}, {}]", self.goal[0], self.goal[1]);
+                let _ = writeln!(s, "robot_radius = {}", self.robot_radius);
+                if !solvable {
+                    let _ = writeln!(s, "solvable = false");
+                }
+                let _ = writeln!(
+                    s,
+                    "# generated: seed {}, {BOXES} boxes of sides {}..{} m, {WALLS} walls {}..{} m long",
+                    self.seed, BOX_SIDES[0], BOX_SIDES[1], WALL_LENGTHS[0], WALL_LENGTHS[1]
+                );
+                s + &body
+            };
+            let text = head(true);
+            match Scenario::parse(&text, Path::new(&self.name)).map(|sc| reachable(&sc)) {
+                Ok(Some(true)) => return text,
+                Ok(Some(false)) => return head(false),
+                _ => {}
+            }
+        }
+    }
+}
+
+/// Whether the robot can reach the goal: `Some(true)` when the reference
+/// finds a path, `Some(false)` when it finds none even for a disc
+/// [`UNSOLVABLE_MARGIN_M`] narrower, `None` between the two (the
+/// reference's grid may have missed a way).
+pub fn reachable(sc: &Scenario) -> Option<bool> {
+    if shortest_path(sc).is_some() {
+        return Some(true);
+    }
+    let narrower = Scenario {
+        robot_radius: sc.robot_radius - UNSOLVABLE_MARGIN_M,
+        ..sc.clone()
+    };
+    shortest_path(&narrower).is_none().then_some(false)
+}
+
+/// A rectangle turned by `turn` (rad) about its centre `c`, m.
+struct TurnedBox {
+    c: [f64; 2],
+    half: [f64; 2],
+    turn: f64,
+}
+
+impl TurnedBox {
+    /// Its corners in order.
+    fn corners(&self) -> [[f64; 2]; 4] {
+        let (s, c) = self.turn.sin_cos();
+        [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)].map(|(i, j)| {
+            let (x, y) = (i * self.half[0], j * self.half[1]);
+            [self.c[0] + x * c - y * s, self.c[1] + x * s + y * c]
+        })
+    }
+
+    /// Distance from `p` to the box (0 inside).
+    fn distance(&self, p: [f64; 2]) -> f64 {
+        let (s, c) = self.turn.sin_cos();
+        let (dx, dy) = (p[0] - self.c[0], p[1] - self.c[1]);
+        // `p` in the box's own frame, folded into its first quadrant.
+        let (x, y) = ((dx * c + dy * s).abs(), (-dx * s + dy * c).abs());
+        (x - self.half[0])
+            .max(0.0)
+            .hypot((y - self.half[1]).max(0.0))
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -90,5 +270,63 @@ mod tests {
         let sc = crate::scenario::Scenario::parse(&a, std::path::Path::new("g")).unwrap();
         assert_eq!(sc.circle.len(), 80);
         assert!(sc.circle.iter().all(|c| (0.12..=0.9).contains(&c.radius)));
+    }
+
+    #[test]
+    fn box_worlds_are_valid_seeded_and_keep_clear_of_start_and_goal() {
+        let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
+        for seed in 1..=4 {
+            let a = world(Kind::Boxes, "b", start, goal, seed);
+            assert_eq!(a, world(Kind::Boxes, "b", start, goal, seed));
+            assert_ne!(a, world(Kind::Boxes, "b", start, goal, seed + 1));
+            let sc = crate::scenario::Scenario::parse(&a, std::path::Path::new("b")).unwrap();
+            assert_eq!(sc.polygon.len(), BOXES + WALLS);
+            let w = crate::world::World::from_scenario(&sc);
+            for p in [start, goal] {
+                let clear = w.clearance(crate::geom::V2::new(p[0], p[1]), 0.0);
+                assert!(
+                    clear > sc.robot_radius + 0.15 - 1e-9,
+                    "seed {seed}: {clear}"
+                );
+            }
+        }
+    }
+
+    #[test]
+    fn a_goal_is_unreachable_only_when_no_way_is_near_the_robots_width() {
+        // The goal behind a wall from one side to the other, with a gap
+        // `gap` m wide at its middle; the robot's disc is 0.2 m across.
+        let walled = |gap: f64| {
+            let (a, b) = (1.5 - gap / 2.0, 1.5 + gap / 2.0);
+            let text = format!(
+                "format = 1\nname = \"w\"\nbounds = [0.0, 0.0, 4.0, 3.0]\nstart = [0.5, 1.5]\ngoal = [3.5, 1.5]\n\
+                 [[polygon]]\npoints = [[1.9, -0.1], [2.1, -0.1], [2.1, {a}], [1.9, {a}]]\n\
+                 [[polygon]]\npoints = [[1.9, {b}], [2.1, {b}], [2.1, 3.1], [1.9, 3.1]]\n"
+            );
+            crate::scenario::Scenario::parse(&text, std::path::Path::new("w")).unwrap()
+        };
+        assert_eq!(reachable(&walled(0.0)), Some(false));
+        assert_eq!(reachable(&walled(0.1)), Some(false));
+        assert_eq!(reachable(&walled(0.3)), Some(true));
+        // Just wider than the disc: the grid may or may not find it.
+        let near = reachable(&walled(0.205));
+        assert_ne!(near, Some(false));
+    }
+
+    #[test]
+    fn turned_box_distance_matches_its_corners() {
+        let b = TurnedBox {
+            c: [1.0, 2.0],
+            half: [0.5, 0.1],
+            turn: 0.7,
+        };
+        for p in b.corners() {
+            assert!(b.distance(p) < 1e-9);
+        }
+        assert_eq!(b.distance(b.c), 0.0);
+        // Straight out from the middle of a long side, 0.3 m.
+        let (s, c) = b.turn.sin_cos();
+        let p = [b.c[0] - 0.4 * s, b.c[1] + 0.4 * c];
+        assert!((b.distance(p) - 0.3).abs() < 1e-9);
     }
 }

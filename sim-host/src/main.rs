@@ -77,7 +77,8 @@ enum Cmd {
         #[arg(long)]
         perfect: bool,
     },
-    /// Write a random circle world with the paper's parameters.
+    /// Write a random world in the paper's environment 2 arena: circles
+    /// with its parameters, or turned boxes and walls (`--kind`).
     Gen {
         /// Output file (with `--count`, a folder).
         out: PathBuf,
@@ -95,6 +96,11 @@ enum Cmd {
         /// Goal x y.
         #[arg(long, num_args = 2, default_values_t = [12.7, 9.75])]
         goal: Vec<f64>,
+        /// What the world is made of: `circles` (the paper's environment
+        /// 2), or `boxes` (turned boxes and thin walls; with `--count`
+        /// named `box-<seed>.toml`).
+        #[arg(long, value_enum, default_value = "circles")]
+        kind: generate::Kind,
     },
 }
 
@@ -280,6 +286,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             count,
             start,
             goal,
+            kind,
         } => {
             let (start, goal) = ([start[0], start[1]], [goal[0], goal[1]]);
             let Some(count) = count else {
@@ -287,15 +294,22 @@ fn real_main(cli: Cli) -> Result<(), String> {
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| "random".into());
-                gen_world(&out, &name, start, goal, seed)?;
+                gen_world(kind, &out, &name, start, goal, seed)?;
                 return say(&format!("wrote {}\n", out.display()));
             };
             let seeds = seed..seed
                 .checked_add(count)
                 .ok_or("--seed + --count overflows")?;
             for s in seeds.clone() {
-                let name = format!("gen-{s}");
-                gen_world(&out.join(format!("{name}.toml")), &name, start, goal, s)?;
+                let name = format!("{}-{s}", kind.prefix());
+                gen_world(
+                    kind,
+                    &out.join(format!("{name}.toml")),
+                    &name,
+                    start,
+                    goal,
+                    s,
+                )?;
             }
             say(&format!(
                 "wrote {count} worlds (seeds {} to {}) to {}\n",
@@ -307,20 +321,17 @@ fn real_main(cli: Cli) -> Result<(), String> {
     }
 }
 
-/// One random world with the paper's environment 2 parameters at `out`,
+/// One random world of `kind` in the paper's environment 2 arena at `out`,
 /// loaded back to check it.
 fn gen_world(
+    kind: generate::Kind,
     out: &PathBuf,
     name: &str,
     start: [f64; 2],
     goal: [f64; 2],
     seed: u64,
 ) -> Result<(), String> {
-    let w = generate::RandomWorld::paper_env2(name, start, goal, seed);
-    write(
-        out,
-        &w.to_toml("random circle world with the EAPF paper's environment 2 parameters"),
-    )?;
+    write(out, &generate::world(kind, name, start, goal, seed))?;
     Scenario::load(out).map(|_| ()).map_err(|e| e.to_string())
 }
 

@@ -47,9 +47,7 @@ pub fn shortest_path(sc: &Scenario) -> Option<Reference> {
         moving: Vec::new(),
         ..world.clone()
     };
-    let free: Vec<bool> = (0..nx * ny)
-        .map(|k| static_world.clearance(pos(k % nx, k / nx), 0.0) > r)
-        .collect();
+    let free = static_world.free_grid([x0, y0], h, [nx, ny], r);
     let start = V2::new(sc.start[0], sc.start[1]);
     let goal = V2::new(sc.goal[0], sc.goal[1]);
     let near = |p: V2| {

@@ -127,6 +127,37 @@ fn gen_count_writes_a_folder_of_worlds_that_bench_reads() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `gen --kind boxes` writes box worlds (`box-<seed>.toml` with
+/// `--count`), each the one it writes alone for that seed, which bench reads;
+/// no circle in them, and an unknown kind is a usage error.
+#[test]
+fn gen_writes_box_worlds() {
+    let (dir, _) = scratch("gen-boxes");
+    let text = sim_host(
+        &["gen", "--kind", "boxes", "--count", "2", "--seed", "7"],
+        &[&dir],
+    );
+    assert_eq!(
+        text,
+        format!("wrote 2 worlds (seeds 7 to 8) to {}\n", dir.display())
+    );
+    let one = dir.join("one").join("box-8.toml");
+    sim_host(&["gen", "--kind", "boxes", "--seed", "8"], &[&one]);
+    let written = std::fs::read_to_string(dir.join("box-8.toml")).unwrap();
+    assert_eq!(std::fs::read_to_string(&one).unwrap(), written);
+    assert!(written.contains("[[polygon]]") && !written.contains("[[circle]]"));
+    std::fs::remove_dir_all(dir.join("one")).unwrap();
+    let table = sim_host(&["bench", "--summary"], &[&dir]);
+    assert!(table.starts_with("runs 2 |"), "{table}");
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["gen", "--kind", "mazes", "unused.toml"])
+        .output()
+        .unwrap();
+    assert!(!out.status.success());
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--kind"));
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn gen_count_zero_is_a_usage_error() {
     let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
