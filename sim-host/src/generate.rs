@@ -50,12 +50,12 @@ const WALL_LENGTHS: [f64; 2] = [0.8, 2.5];
 const WALL_THICKNESS: f64 = 0.06;
 
 /// A box world's goal is written unsolvable only when the reference finds
-/// no path for a disc this much narrower (m) than the robot either: the
+/// no path for a disc of a radius this much smaller (m) either: the
 /// reference's grid can miss a gap up to one cell (0.02 m) wider than the
-/// disc, so with this margin a missed way is at least 0.02 m too narrow
-/// for the robot. Worlds between the two (a way the grid may have missed)
-/// are drawn again.
-const UNSOLVABLE_MARGIN_M: f64 = 0.03;
+/// disc, so a way it misses for the smaller disc (0.06 m narrower) is at
+/// least 0.04 m too narrow for the robot. Worlds between the two (a way
+/// the grid may have missed) are drawn again.
+pub const UNSOLVABLE_MARGIN_M: f64 = 0.03;
 
 /// Parameters of a random circle world.
 #[derive(Clone, Debug)]
@@ -215,8 +215,8 @@ impl RandomWorld {
 }
 
 /// Whether the robot can reach the goal: `Some(true)` when the reference
-/// finds a path, `Some(false)` when it finds none even for a disc
-/// [`UNSOLVABLE_MARGIN_M`] narrower, `None` between the two (the
+/// finds a path, `Some(false)` when it finds none even for a disc whose
+/// radius is [`UNSOLVABLE_MARGIN_M`] smaller, `None` between the two (the
 /// reference's grid may have missed a way).
 pub fn reachable(sc: &Scenario) -> Option<bool> {
     if shortest_path(sc).is_some() {

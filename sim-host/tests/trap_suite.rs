@@ -301,3 +301,34 @@ fn the_u_trap_is_reached_with_every_seed() {
         assert_eq!(outcome, Outcome::Reached, "seed {seed}");
     }
 }
+
+/// The three collisions over five seeds of 200 box worlds (`gen --kind
+/// boxes --count 200 --seed 1`; docs/bench.md, "Known failures"): a box
+/// seen too close from one spot and forgotten by the next view there, and
+/// a fold-back read after an advance. Ignored until a rule keeps them off:
+/// `cargo test --release -p sim-host --test trap_suite -- --ignored` runs
+/// them.
+#[test]
+#[ignore = "collides: docs/bench.md, Known failures, collisions in box worlds"]
+fn box_worlds_known_collisions() {
+    use sim_host::generate::{world, Kind};
+    let dir = std::env::temp_dir().join(format!("boxes-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for (world_seed, seed) in [(145, 2), (200, 3), (105, 4)] {
+        let name = format!("box-{world_seed}");
+        let file = dir.join(format!("{name}.toml"));
+        let text = world(Kind::Boxes, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
+        std::fs::write(&file, text).unwrap();
+        let cfg = SimConfig {
+            seed,
+            ..SimConfig::default()
+        };
+        let rows = run_all(&[file], &cfg, false).unwrap();
+        assert_ne!(
+            rows[0].outcome,
+            Outcome::Collision,
+            "{name} with seed {seed}"
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
