@@ -168,6 +168,25 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 ),
                 None => "reference    none (no path on the reference grid)\n".into(),
             };
+            // The planners keep their clearance beyond the disc: the
+            // shortest way that leaves it, beside the disc's own, tells a
+            // goal behind a gap they cannot pass from one they miss.
+            let margin_mm =
+                planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
+                    .build()
+                    .map_err(|e| format!("{e:?}"))?
+                    .clearance_mm();
+            let wider = Scenario {
+                robot_radius: sc.robot_radius + margin_mm as f64 / 1000.0,
+                ..sc.clone()
+            };
+            report += &match reference::shortest_path(&wider) {
+                Some(r) => format!(
+                    "with_margin  {:.3} m (the disc + {margin_mm} mm)\n",
+                    r.length
+                ),
+                None => format!("with_margin  none (no path for the disc + {margin_mm} mm)\n"),
+            };
             report += &format!(
                 "min_clear    {:.3} m\nvirtual_obs  {}\n",
                 res.min_clearance, res.virtual_dropped

@@ -158,6 +158,37 @@ fn gen_writes_box_worlds() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// `run` prints the shortest way for the disc plus the planners' 40 mm as
+/// well as the disc's: through a gap 0.25 m wide the disc (0.2 m) passes,
+/// with 40 mm either side it does not.
+#[test]
+fn run_prints_the_way_with_the_planners_margin() {
+    let (dir, _) = scratch("margin");
+    let file = dir.join("gap.toml");
+    let wall = |gap: f64| {
+        let (a, b) = (1.5 - gap / 2.0, 1.5 + gap / 2.0);
+        format!(
+            "format = 1\nname = \"gap\"\nbounds = [0.0, 0.0, 4.0, 3.0]\nstart = [0.5, 1.5]\ngoal = [3.5, 1.5]\n\
+             [[polygon]]\npoints = [[1.9, -0.1], [2.1, -0.1], [2.1, {a}], [1.9, {a}]]\n\
+             [[polygon]]\npoints = [[1.9, {b}], [2.1, {b}], [2.1, 3.1], [1.9, 3.1]]\n"
+        )
+    };
+    std::fs::write(&file, wall(0.25)).unwrap();
+    let text = sim_host(&["run"], &[&file]);
+    assert!(text.contains("reference    3.000 m"), "{text}");
+    assert!(
+        text.contains("with_margin  none (no path for the disc + 40 mm)"),
+        "{text}"
+    );
+    std::fs::write(&file, wall(0.5)).unwrap();
+    let text = sim_host(&["run"], &[&file]);
+    assert!(
+        text.contains("with_margin  3.000 m (the disc + 40 mm)"),
+        "{text}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn gen_count_zero_is_a_usage_error() {
     let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
