@@ -303,9 +303,9 @@ fn the_u_trap_is_reached_with_every_seed() {
 }
 
 /// The three collisions over five seeds of 200 box worlds (`gen --kind
-/// boxes --count 200 --seed 1`; docs/bench.md, "Known failures"): a box
-/// seen too close from one spot and forgotten by the next view there, and
-/// a fold-back read after an advance. Ignored until a rule keeps them off:
+/// boxes --count 200 --seed 1`; docs/bench.md, "Known failures"): box
+/// corners beyond the beams that no view saw, grazed after turns on one
+/// spot, and a fold-back read after an advance. Ignored until a rule keeps them off:
 /// `cargo test --release -p sim-host --test trap_suite -- --ignored` runs
 /// them.
 #[test]
