@@ -93,10 +93,9 @@ impl RandomWorld {
         }
     }
 
-    /// The scenario file text. Circles that would come within
-    /// `robot_radius + 0.15` m of the start or goal are drawn again.
-    pub fn to_toml(&self, description: &str) -> String {
-        let mut rng = Pcg64::seed_from_u64(self.seed);
+    /// The file's first lines: format, name, description, bounds, start,
+    /// goal and robot.
+    fn header(&self, description: &str) -> String {
         let mut s = String::new();
         let _ = writeln!(s, "format = 1");
         let _ = writeln!(s, "name = \"{}\"", self.name);
@@ -105,6 +104,14 @@ impl RandomWorld {
         let _ = writeln!(s, "start = [{}, {}]", self.start[0], self.start[1]);
         let _ = writeln!(s, "goal = [{}, {}]", self.goal[0], self.goal[1]);
         let _ = writeln!(s, "robot_radius = {}", self.robot_radius);
+        s
+    }
+
+    /// The scenario file text. Circles that would come within
+    /// `robot_radius + 0.15` m of the start or goal are drawn again.
+    pub fn to_toml(&self, description: &str) -> String {
+        let mut rng = Pcg64::seed_from_u64(self.seed);
+        let mut s = self.header(description);
         let _ = writeln!(
             s,
             "# generated: seed {}, {} circles, radii {}..{} m",
@@ -186,14 +193,7 @@ impl RandomWorld {
                 n += 1;
             }
             let head = |solvable: bool| {
-                let mut s = String::new();
-                let _ = writeln!(s, "format = 1");
-                let _ = writeln!(s, "name = \"{}\"", self.name);
-                let _ = writeln!(s, "description = \"{description}\"");
-                let _ = writeln!(s, "bounds = [0.0, 0.0, {}, {}]", self.size[0], self.size[1]);
-                let _ = writeln!(s, "start = [{}, {}]", self.start[0], self.start[1]);
-                let _ = writeln!(s, "goal = [{}, {}]", self.goal[0], self.goal[1]);
-                let _ = writeln!(s, "robot_radius = {}", self.robot_radius);
+                let mut s = self.header(description);
                 if !solvable {
                     let _ = writeln!(s, "solvable = false");
                 }

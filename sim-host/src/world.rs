@@ -379,11 +379,9 @@ mod tests {
         assert!(c > 0.5);
     }
 
-    /// `free_grid` answers as the clearance of each node does, on every
-    /// world of the library, a box world and a circle world of `gen`, for
-    /// the robot's radius and for radii with nodes on the threshold.
-    #[test]
-    fn the_free_grid_is_the_clearance_at_every_node() {
+    /// Every world of the library, and a box world and a circle world of
+    /// `gen`.
+    fn library_and_generated() -> Vec<Scenario> {
         use crate::generate::{world as generated, Kind};
         let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
         let mut scenarios: Vec<Scenario> = crate::scenario::collect(&[dir])
@@ -395,6 +393,15 @@ mod tests {
             let text = generated(kind, "g", [6.0, 7.3], [12.7, 9.75], 5);
             scenarios.push(Scenario::parse(&text, Path::new("g")).unwrap());
         }
+        scenarios
+    }
+
+    /// `free_grid` answers as the clearance of each node does, on every
+    /// world of the library, a box world and a circle world of `gen`, for
+    /// the robot's radius and for radii with nodes on the threshold.
+    #[test]
+    fn the_free_grid_is_the_clearance_at_every_node() {
+        let scenarios = library_and_generated();
         for sc in &scenarios {
             let w = World {
                 moving: Vec::new(),
@@ -420,7 +427,6 @@ mod tests {
     /// on purpose (and sweeps 0.3 m long from each of its points).
     #[test]
     fn clearance_skips_no_nearer_polygon() {
-        use crate::generate::{world as generated, Kind};
         let plain = |w: &World, p: V2| {
             let [x0, y0, x1, y1] = w.bounds;
             let mut d = (p.x - x0).min(x1 - p.x).min(p.y - y0).min(y1 - p.y);
@@ -463,16 +469,7 @@ mod tests {
             }
             d.max(0.0)
         };
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        let mut scenarios: Vec<Scenario> = crate::scenario::collect(&[dir])
-            .unwrap()
-            .iter()
-            .map(|f| Scenario::load(f).unwrap())
-            .collect();
-        for kind in [Kind::Boxes, Kind::Circles] {
-            let text = generated(kind, "g", [6.0, 7.3], [12.7, 9.75], 5);
-            scenarios.push(Scenario::parse(&text, Path::new("g")).unwrap());
-        }
+        let scenarios = library_and_generated();
         let mut compared = 0;
         for sc in &scenarios {
             let w = World {
