@@ -4,6 +4,7 @@
 //! corners at every angle, pockets and walled-in goals, which circles
 //! never make).
 
+use crate::geom::{point_in_polygon, point_segment_distance, polygon_edges, V2};
 use crate::reference::shortest_path;
 use crate::scenario::Scenario;
 use rand::{Rng, SeedableRng};
@@ -248,13 +249,14 @@ impl TurnedBox {
 
     /// Distance from `p` to the box (0 inside).
     fn distance(&self, p: [f64; 2]) -> f64 {
-        let (s, c) = self.turn.sin_cos();
-        let (dx, dy) = (p[0] - self.c[0], p[1] - self.c[1]);
-        // `p` in the box's own frame, folded into its first quadrant.
-        let (x, y) = ((dx * c + dy * s).abs(), (-dx * s + dy * c).abs());
-        (x - self.half[0])
-            .max(0.0)
-            .hypot((y - self.half[1]).max(0.0))
+        let corners = self.corners().map(|[x, y]| V2::new(x, y));
+        let p = V2::new(p[0], p[1]);
+        if point_in_polygon(p, &corners) {
+            return 0.0;
+        }
+        polygon_edges(&corners)
+            .map(|(a, b)| point_segment_distance(p, a, b))
+            .fold(f64::INFINITY, f64::min)
     }
 }
 

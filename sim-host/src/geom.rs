@@ -130,6 +130,11 @@ pub fn ray_segment(o: V2, dir: V2, a: V2, b: V2) -> Option<f64> {
     (t >= 0.0 && (-1e-12..=1.0 + 1e-12).contains(&u)).then_some(t)
 }
 
+/// The edges of `poly`, each corner to the next and the last to the first.
+pub fn polygon_edges(poly: &[V2]) -> impl Iterator<Item = (V2, V2)> + '_ {
+    (0..poly.len()).map(move |i| (poly[i], poly[(i + 1) % poly.len()]))
+}
+
 /// Whether `p` lies inside the polygon (even-odd rule).
 pub fn point_in_polygon(p: V2, poly: &[V2]) -> bool {
     let mut inside = false;

@@ -171,11 +171,10 @@ fn real_main(cli: Cli) -> Result<(), String> {
             // The planners keep their clearance beyond the disc: the
             // shortest way that leaves it, beside the disc's own, tells a
             // goal behind a gap they cannot pass from one they miss.
-            let margin_mm =
-                planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
-                    .build()
-                    .map_err(|e| format!("{e:?}"))?
-                    .clearance_mm();
+            let margin_mm = planner_core::ConfigBuilder::new(cfg.adc)
+                .build()
+                .map_err(|e| format!("{e:?}"))?
+                .clearance_mm();
             let wider = Scenario {
                 robot_radius: sc.robot_radius + margin_mm as f64 / 1000.0,
                 ..sc.clone()

@@ -1,7 +1,7 @@
 //! The world: circles, polygons, the boundary walls and moving circles, with
 //! exact ray casting and exact swept-disc collision checking.
 
-use crate::geom::{self, V2};
+use crate::geom::{self, polygon_edges, V2};
 use crate::scenario::Scenario;
 
 /// A circle moving back and forth along its waypoints at constant speed.
@@ -53,6 +53,16 @@ impl Moving {
         }
         a + (b - a) * ((s - self.cum[k - 1]) / seg)
     }
+}
+
+/// How far apart the boxes `lo`–`hi` and `a`–`b` (lowest, highest corners)
+/// lie along x and along y (0 where they overlap): their distance is at
+/// least the hypotenuse of the two.
+fn box_gap((lo, hi): (V2, V2), (a, b): (V2, V2)) -> (f64, f64) {
+    (
+        (lo.x - b.x).max(a.x - hi.x).max(0.0),
+        (lo.y - b.y).max(a.y - hi.y).max(0.0),
+    )
 }
 
 /// The corners of the axis-aligned box round `poly`: lowest, highest.
@@ -116,9 +126,7 @@ impl World {
     }
 
     fn edges(&self) -> impl Iterator<Item = (V2, V2)> + '_ {
-        self.polygons
-            .iter()
-            .flat_map(|p| (0..p.len()).map(move |i| (p[i], p[(i + 1) % p.len()])))
+        self.polygons.iter().flat_map(|p| polygon_edges(p))
     }
 
     /// Distance from `p` to the nearest obstacle or wall at time `t`
@@ -126,7 +134,7 @@ impl World {
     ///
     /// A polygon whose bounding box is farther than the nearest distance
     /// so far cannot be nearer: its edges are skipped (the same answer;
-    /// the route layer's map asks this some 10^6 times per box world).
+    /// the route layer's map asks this for every point of its scans).
     pub fn clearance(&self, p: V2, t: f64) -> f64 {
         let [x0, y0, x1, y1] = self.bounds;
         let mut d = (p.x - x0).min(x1 - p.x).min(p.y - y0).min(y1 - p.y);
@@ -139,30 +147,18 @@ impl World {
         if d <= 0.0 {
             return 0.0;
         }
-        // The nearest polygon corner, squared: no polygon farther than it
-        // can hold the nearest edge.
-        let corner = |q: &V2| (q.x - p.x) * (q.x - p.x) + (q.y - p.y) * (q.y - p.y);
-        let near = self
-            .polygons
-            .iter()
-            .filter_map(|poly| poly.first())
-            .map(corner)
-            .fold(d * d, f64::min);
         for poly in &self.polygons {
-            let (lo, hi) = bounding_box(poly);
-            let ox = (lo.x - p.x).max(p.x - hi.x).max(0.0);
-            let oy = (lo.y - p.y).max(p.y - hi.y).max(0.0);
-            if ox == 0.0 && oy == 0.0 {
+            let (gx, gy) = box_gap(bounding_box(poly), (p, p));
+            if gx == 0.0 && gy == 0.0 {
                 if geom::point_in_polygon(p, poly) {
                     return 0.0;
                 }
-            } else if ox * ox + oy * oy > near.min(d * d) * (1.0 + 1e-9) {
-                // Farther than a distance already found or sure to be, by
-                // far more than rounding: so is every edge.
+            } else if gx * gx + gy * gy > d * d * (1.0 + 1e-9) {
+                // Farther than a distance already found, by far more than
+                // rounding: so is every edge.
                 continue;
             }
-            for i in 0..poly.len() {
-                let (a, b) = (poly[i], poly[(i + 1) % poly.len()]);
+            for (a, b) in polygon_edges(poly) {
                 d = d.min(geom::point_segment_distance(p, a, b));
             }
         }
@@ -208,9 +204,7 @@ impl World {
             let (lo, hi) = bounding_box(poly);
             block(lo, hi, &|p| {
                 geom::point_in_polygon(p, poly)
-                    || (0..poly.len()).any(|i| {
-                        geom::point_segment_distance(p, poly[i], poly[(i + 1) % poly.len()]) <= r
-                    })
+                    || polygon_edges(poly).any(|(a, b)| geom::point_segment_distance(p, a, b) <= r)
             });
         }
         free
@@ -236,14 +230,9 @@ impl World {
         }
         // As in `clearance`: a polygon whose bounding box is farther from
         // the segment's than the nearest distance so far is skipped.
-        let (slo, shi) = (
-            V2::new(a.x.min(b.x), a.y.min(b.y)),
-            V2::new(a.x.max(b.x), a.y.max(b.y)),
-        );
+        let swept = bounding_box(&[a, b]);
         for poly in &self.polygons {
-            let (lo, hi) = bounding_box(poly);
-            let gx = (lo.x - shi.x).max(slo.x - hi.x).max(0.0);
-            let gy = (lo.y - shi.y).max(slo.y - hi.y).max(0.0);
+            let (gx, gy) = box_gap(bounding_box(poly), swept);
             if gx == 0.0 && gy == 0.0 {
                 if geom::point_in_polygon(a, poly) || geom::point_in_polygon(b, poly) {
                     return 0.0;
@@ -251,8 +240,7 @@ impl World {
             } else if gx * gx + gy * gy > d * d * (1.0 + 1e-9) {
                 continue;
             }
-            for i in 0..poly.len() {
-                let (p, q) = (poly[i], poly[(i + 1) % poly.len()]);
+            for (p, q) in polygon_edges(poly) {
                 d = d.min(geom::segment_segment_distance(a, b, p, q));
             }
         }
