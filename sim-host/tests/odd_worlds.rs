@@ -3,13 +3,14 @@
 //! obstacles on the start, outside the walls or a million metres away;
 //! moving obstacles at any speed), a file is either refused with the key
 //! and the rule it breaks or it runs, and nothing panics: not the parser,
-//! not the world, not the route map, not the planner. FORMAT.md's rules and
+//! not the world, not the route map, not any of the planners. FORMAT.md's rules and
 //! ours (positions within ±32.767 m) are checked in `scenario`'s unit tests;
 //! this is the net under them. Collisions are not counted against the
 //! planners here: these worlds hold moving obstacles at any speed, and posts
 //! of a few centimetres that the five beams pass by (docs/bench.md, "Known
 //! failures").
 
+use clap::ValueEnum;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use sim_host::planners::PlannerKind;
@@ -123,7 +124,8 @@ fn an_odd_file_is_refused_with_its_key_or_runs_and_nothing_panics() {
                 }
                 Ok(sc) => {
                     ran.set(ran.get() + 1);
-                    for planner in [PlannerKind::Eapf, PlannerKind::Route] {
+                    // Every planner `--planner` offers.
+                    for &planner in PlannerKind::value_variants() {
                         let cfg = SimConfig {
                             planner,
                             max_steps: 600,
