@@ -1054,11 +1054,10 @@ mod tests {
         // way is clear. With a round left the route is planned again over
         // the whole map, and followed to the goal; without, the rover
         // heads for the goal directly with the blocks kept.
-        let m: RouteMap<4, 4> = chain(
+        let mut m: RouteMap<4, 4> = chain(
             &[(1_500, 1_500), (0, 0), (-1_500, 1_500), (0, 3_000)],
             &[500, 500, 500],
         );
-        let mut m = m;
         m.add_edge(0, 3, 500).unwrap();
         let after_blocks = |unblock_rounds| {
             let cfg = RouteConfig {
