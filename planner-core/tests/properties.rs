@@ -2,6 +2,7 @@
 
 use planner_core::command::free_distance_mm;
 use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY};
+use planner_core::route::{RouteConfig, RouteMap, RoutePlanner};
 use planner_core::{
     AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Point, Pose, Reading, Status,
 };
@@ -54,6 +55,49 @@ proptest! {
                 prop_assert_eq!(step, 0);
             }
             // The guard never panics and agrees with the safety rule ahead.
+            let _ = p.guard_raw(&raw, step);
+        }
+    }
+
+    /// The route layer over any small map (edges naming missing nodes
+    /// refused), any goal, any poses and counts: no panic; each step keeps
+    /// the safety rule of the planner it drives, and stops have a zero
+    /// step.
+    #[test]
+    fn the_route_layer_keeps_the_invariants_over_any_map(
+        nodes in prop::collection::vec((any::<i16>(), any::<i16>()), 0..8),
+        edges in prop::collection::vec((0u16..10, 0u16..10, any::<u16>()), 0..20),
+        goal in (any::<i16>(), any::<i16>()),
+        cycles in prop::collection::vec((pose(), prop::array::uniform5(counts())), 1..8),
+    ) {
+        let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().unwrap();
+        let range = cfg.sensor_range_mm();
+        let half = cfg.sector_half_width();
+        let mut map: RouteMap<8, 16> = RouteMap::new();
+        for (x, y) in nodes {
+            map.add_node(Point::new(x, y)).unwrap();
+        }
+        for (a, b, clearance) in edges {
+            // A missing node, a loop or a full map: refused, not a panic.
+            let _ = map.add_edge(a, b, clearance);
+        }
+        let mut p = RoutePlanner::new(cfg, map, RouteConfig::default(), Point::new(goal.0, goal.1));
+        for (pose, raw) in cycles {
+            let out = p.step_raw(pose, &raw);
+            let step = out.command.step_mm;
+            prop_assert!(step <= range);
+            let rel = out.command.heading.sub(pose.heading);
+            if rel.abs_signed() > half.0 {
+                prop_assert_eq!(step, 0);
+            }
+            if step > 0 {
+                prop_assert_eq!(out.status, Status::Moving);
+                let free = free_distance_mm(&cfg, p.planner().last_readings(), rel);
+                prop_assert!(step <= free, "step {} > free {}", step, free);
+            }
+            if out.status != Status::Moving {
+                prop_assert_eq!(step, 0);
+            }
             let _ = p.guard_raw(&raw, step);
         }
     }
