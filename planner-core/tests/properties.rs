@@ -4,7 +4,8 @@ use planner_core::command::free_distance_mm;
 use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY};
 use planner_core::route::{RouteConfig, RouteMap, RoutePlanner};
 use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Point, Pose, Reading, Status,
+    AdcProfile, Angle, Config, ConfigBuilder, EscapeConfig, Output, Planner, Point, Pose, Reading,
+    Readings, Status,
 };
 use proptest::prelude::*;
 
@@ -18,6 +19,33 @@ fn pose() -> impl Strategy<Value = Pose> {
 /// Mostly counts a sensor can give (so the planner moves), sometimes any.
 fn counts() -> impl Strategy<Value = u16> {
     prop_oneof![12 => 0u16..700, 1 => any::<u16>()]
+}
+
+/// The step is within [0, range]; the safety rule holds for the readings
+/// it was planned from (none implausible); a heading outside the sensed
+/// sector is a pure turn; stops have a zero step.
+fn step_keeps_the_rules(
+    cfg: &Config,
+    readings: &Readings,
+    pose: Pose,
+    out: Output,
+) -> Result<(), TestCaseError> {
+    let step = out.command.step_mm;
+    prop_assert!(step <= cfg.sensor_range_mm());
+    let rel = out.command.heading.sub(pose.heading);
+    if rel.abs_signed() > cfg.sector_half_width().0 {
+        prop_assert_eq!(step, 0);
+    }
+    if step > 0 {
+        prop_assert_eq!(out.status, Status::Moving);
+        let free = free_distance_mm(cfg, readings, rel);
+        prop_assert!(step <= free, "step {} > free {}", step, free);
+        prop_assert!(!readings.contains(&Reading::Implausible));
+    }
+    if out.status != Status::Moving {
+        prop_assert_eq!(step, 0);
+    }
+    Ok(())
 }
 
 proptest! {
@@ -34,28 +62,12 @@ proptest! {
     ) {
         let adc = if stm32 { AdcProfile::STM32_12BIT_3V3 } else { AdcProfile::AVR_10BIT_5V };
         let cfg = ConfigBuilder::new(adc).build().unwrap();
-        let range = cfg.sensor_range_mm();
-        let half = cfg.sector_half_width();
         let mut p = Planner::new(cfg, Point::new(goal.0, goal.1));
         for (pose, raw) in cycles {
             let out = p.step_raw(pose, &raw);
-            let step = out.command.step_mm;
-            prop_assert!(step <= range);
-            let rel = out.command.heading.sub(pose.heading);
-            if rel.abs_signed() > half.0 {
-                prop_assert_eq!(step, 0);
-            }
-            if step > 0 {
-                prop_assert_eq!(out.status, Status::Moving);
-                let free = free_distance_mm(&cfg, p.last_readings(), rel);
-                prop_assert!(step <= free, "step {} > free {}", step, free);
-                prop_assert!(!p.last_readings().contains(&Reading::Implausible));
-            }
-            if out.status != Status::Moving {
-                prop_assert_eq!(step, 0);
-            }
-            // The guard never panics and agrees with the safety rule ahead.
-            let _ = p.guard_raw(&raw, step);
+            step_keeps_the_rules(&cfg, p.last_readings(), pose, out)?;
+            // The guard never panics.
+            let _ = p.guard_raw(&raw, out.command.step_mm);
         }
     }
 
@@ -71,8 +83,6 @@ proptest! {
         cycles in prop::collection::vec((pose(), prop::array::uniform5(counts())), 1..8),
     ) {
         let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().unwrap();
-        let range = cfg.sensor_range_mm();
-        let half = cfg.sector_half_width();
         let mut map: RouteMap<8, 16> = RouteMap::new();
         for (x, y) in nodes {
             map.add_node(Point::new(x, y)).unwrap();
@@ -84,21 +94,8 @@ proptest! {
         let mut p = RoutePlanner::new(cfg, map, RouteConfig::default(), Point::new(goal.0, goal.1));
         for (pose, raw) in cycles {
             let out = p.step_raw(pose, &raw);
-            let step = out.command.step_mm;
-            prop_assert!(step <= range);
-            let rel = out.command.heading.sub(pose.heading);
-            if rel.abs_signed() > half.0 {
-                prop_assert_eq!(step, 0);
-            }
-            if step > 0 {
-                prop_assert_eq!(out.status, Status::Moving);
-                let free = free_distance_mm(&cfg, p.planner().last_readings(), rel);
-                prop_assert!(step <= free, "step {} > free {}", step, free);
-            }
-            if out.status != Status::Moving {
-                prop_assert_eq!(step, 0);
-            }
-            let _ = p.guard_raw(&raw, step);
+            step_keeps_the_rules(&cfg, p.planner().last_readings(), pose, out)?;
+            let _ = p.guard_raw(&raw, out.command.step_mm);
         }
     }
 
