@@ -95,7 +95,8 @@ pub fn run_all_pictured(
         ));
     }
     std::fs::create_dir_all(pictures).map_err(|e| format!("{}: {e}", pictures.display()))?;
-    let (rows, failed) = run_loaded(&scenarios, cfg, progress, Some(pictures));
+    let margin_mm = cfg.margin_mm()?;
+    let (rows, failed) = run_loaded(&scenarios, cfg, progress, Some((pictures, margin_mm)));
     match failed {
         Some(e) => Err(e),
         None => Ok(rows),
@@ -110,12 +111,13 @@ fn load_all(files: &[PathBuf]) -> Result<Vec<(PathBuf, Scenario)>, ScenarioError
 }
 
 /// The runs, sorted by file, and the first picture that could not be
-/// written.
+/// written (pictures drawn into the folder with the way for the disc plus
+/// the planners' margin, mm).
 fn run_loaded(
     scenarios: &[(PathBuf, Scenario)],
     cfg: &SimConfig,
     progress: bool,
-    pictures: Option<&Path>,
+    pictures: Option<(&Path, u16)>,
 ) -> (Vec<Row>, Option<String>) {
     let bar = if progress {
         ProgressBar::new(scenarios.len() as u64)
@@ -133,18 +135,20 @@ fn run_loaded(
             let refp = reference::shortest_path(sc);
             let refl = refp.as_ref().map(|r| r.length);
             let res = sim::run(sc, cfg, refl);
-            if let Some(dir) = pictures {
+            if let Some((dir, margin_mm)) = pictures {
                 let stem = file.file_stem().unwrap_or_default().to_string_lossy();
                 let out = dir.join(format!(
                     "{stem}-{}-seed{}.svg",
                     cfg.planner.name(),
                     cfg.seed
                 ));
+                let wider = reference::with_margin(sc, margin_mm);
                 let pic = svg::render(
                     sc,
                     &res,
                     cfg.planner.name(),
                     refp.as_ref().map(|r| r.path.as_slice()),
+                    wider.as_ref().map(|r| r.path.as_slice()),
                 );
                 if let Err(e) = std::fs::write(&out, pic) {
                     let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());

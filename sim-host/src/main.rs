@@ -171,15 +171,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
             // The planners keep their clearance beyond the disc: the
             // shortest way that leaves it, beside the disc's own, tells a
             // goal behind a gap they cannot pass from one they miss.
-            let margin_mm = planner_core::ConfigBuilder::new(cfg.adc)
-                .build()
-                .map_err(|e| format!("{e:?}"))?
-                .clearance_mm();
-            let wider = Scenario {
-                robot_radius: sc.robot_radius + margin_mm as f64 / 1000.0,
-                ..sc.clone()
-            };
-            report += &match reference::shortest_path(&wider) {
+            let margin_mm = cfg.margin_mm()?;
+            let wider = reference::with_margin(&sc, margin_mm);
+            report += &match &wider {
                 Some(r) => format!(
                     "with_margin  {:.3} m (the disc + {margin_mm} mm)\n",
                     r.length
@@ -206,6 +200,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                     &res,
                     planner.name(),
                     refp.as_ref().map(|r| r.path.as_slice()),
+                    wider.as_ref().map(|r| r.path.as_slice()),
                 );
                 write(&out, &pic)?;
                 report += &format!("svg          {}\n", out.display());

@@ -33,6 +33,18 @@ pub struct Reference {
     pub path: Vec<V2>,
 }
 
+/// The shortest path for the robot's disc widened by `margin_mm`: the way
+/// the planners, which keep that clearance beyond the disc, can take. Beside
+/// the disc's own, it tells a goal behind a gap they cannot pass from one
+/// they miss.
+pub fn with_margin(sc: &Scenario, margin_mm: u16) -> Option<Reference> {
+    let wider = Scenario {
+        robot_radius: sc.robot_radius + f64::from(margin_mm) / 1000.0,
+        ..sc.clone()
+    };
+    shortest_path(&wider)
+}
+
 /// The shortest path for the scenario's robot at time zero, ignoring moving
 /// obstacles; `None` when the grid finds no path.
 pub fn shortest_path(sc: &Scenario) -> Option<Reference> {

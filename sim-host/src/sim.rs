@@ -83,6 +83,17 @@ impl Default for SimConfig {
     }
 }
 
+impl SimConfig {
+    /// The clearance the planners keep beyond the disc (the safety rule's,
+    /// of the default configuration for this board's ADC), mm.
+    pub fn margin_mm(&self) -> Result<u16, String> {
+        planner_core::ConfigBuilder::new(self.adc)
+            .build()
+            .map(|c| c.clearance_mm())
+            .map_err(|e| format!("{e:?}"))
+    }
+}
+
 /// One row of the driven path.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TraceRow {

@@ -1,14 +1,28 @@
 //! A picture of one run: obstacles, the reference path, the driven path,
 //! start and goal, the collision points the planner saw, the remembered
-//! points and their midpoint, and the virtual obstacles.
+//! points and their midpoint, and the virtual obstacles; and where the
+//! planners' margin makes the way longer than the disc's, that way too.
 
 use crate::geom::V2;
 use crate::scenario::Scenario;
 use crate::sim::RunResult;
 use std::fmt::Write;
 
-/// The SVG document for a run.
-pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&[V2]>) -> String {
+/// How much longer than the reference the way with the planners' margin
+/// must be to be drawn (in most worlds the two lie on one another).
+const MARGIN_DRAWN_ABOVE: f64 = 1.01;
+
+/// The SVG document for a run: `reference` is the disc's shortest way,
+/// `with_margin` the shortest for the disc plus the planners' clearance
+/// (drawn when longer than the reference by more than 1 %, and named in the
+/// figures line when there is none).
+pub fn render(
+    sc: &Scenario,
+    run: &RunResult,
+    planner: &str,
+    reference: Option<&[V2]>,
+    with_margin: Option<&[V2]>,
+) -> String {
     let [x0, y0, x1, y1] = sc.bounds;
     let (w, h) = (x1 - x0, y1 - y0);
     let scale = 900.0 / w.max(h);
@@ -45,12 +59,23 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
         xml(&sc.name),
         run.outcome.as_str()
     );
-    let ratio = reference
+    let length = |r: &[V2]| r.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>();
+    let mut ratio = reference
         .map(|r| {
-            let l: f64 = r.windows(2).map(|w| w[0].dist(w[1])).sum();
+            let l = length(r);
             format!(", {:.2}× the reference {:.2} m", run.path_length / l, l)
         })
         .unwrap_or_default();
+    let margin_drawn = match (reference, with_margin) {
+        (Some(r), Some(m)) => length(m) > MARGIN_DRAWN_ABOVE * length(r),
+        (None, Some(_)) => true,
+        (_, None) => false,
+    };
+    match with_margin {
+        Some(m) if margin_drawn => ratio += &format!(" ({:.2} m with the margin)", length(m)),
+        None if reference.is_some() => ratio += " (no way with the margin)",
+        _ => {}
+    }
     let _ = writeln!(
         s,
         r##"<text x="10" y="48" font-size="13" fill="#444">{} steps, path {:.2} m{ratio}, min clearance {:.3} m, {} virtual obstacles</text>"##,
@@ -103,6 +128,14 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
             s,
             r##"<polyline points="{}" fill="none" stroke="#2da44e" stroke-width="2" stroke-dasharray="6 4" opacity="0.8"/>"##,
             poly(r, &px)
+        );
+    }
+    // The way with the planners' margin, where it is not the reference's.
+    if let Some(m) = with_margin.filter(|_| margin_drawn) {
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#1b7c83" stroke-width="2" stroke-dasharray="1 4" stroke-linecap="round"/>"##,
+            poly(m, &px)
         );
     }
     // The route over the known map (planner `route`), and its waypoints.
@@ -194,9 +227,15 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
         ("#8250df", "remembered / midpoint"),
         ("#54aeff", "virtual obstacles"),
     ];
+    let margin_item = [("#1b7c83", "with margin")];
     let route_item = [("#bf8700", "route")];
     let items: Vec<_> = items
         .iter()
+        .chain(if margin_drawn {
+            &margin_item[..]
+        } else {
+            &[][..]
+        })
         .chain(if run.route.is_empty() {
             &[][..]
         } else {
@@ -205,7 +244,7 @@ pub fn render(sc: &Scenario, run: &RunResult, planner: &str, reference: Option<&
         .collect();
     let mut lx = pw - 10.0;
     for (c, label) in items.iter().rev() {
-        lx -= 8.0 * label.len() as f64 + 22.0;
+        lx -= 7.0 * label.len() as f64 + 22.0;
         let _ = writeln!(
             s,
             r##"<rect x="{lx:.1}" y="62" width="12" height="12" fill="{c}"/><text x="{:.1}" y="73" font-size="12">{label}</text>"##,

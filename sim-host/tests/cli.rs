@@ -301,3 +301,65 @@ fn bench_compares_several_planners() {
     assert_eq!(json_field(&json, "planner"), ["eapf", "apf", "route"]);
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// Two circles 0.25 m apart: the disc (0.2 m across) passes between them,
+/// the disc plus the planners' 40 mm does not. `bounds_y` shuts the way
+/// round them or leaves it open.
+fn gap_world(dir: &Path, name: &str, bounds_y: (f64, f64)) -> PathBuf {
+    let file = dir.join(format!("{name}.toml"));
+    let text = format!(
+        "format = 1\nname = \"{name}\"\nbounds = [0.0, {}, 7.0, {}]\n\
+         start = [1.0, 3.0]\ngoal = [6.0, 3.0]\nrobot_radius = 0.1\n\n\
+         [[circle]]\ncenter = [3.5, 2.425]\nradius = 0.45\n\
+         [[circle]]\ncenter = [3.5, 3.575]\nradius = 0.45\n",
+        bounds_y.0, bounds_y.1
+    );
+    std::fs::create_dir_all(dir).unwrap();
+    std::fs::write(&file, text).unwrap();
+    file
+}
+
+/// The picture draws the way with the planners' margin where it is longer
+/// than the disc's, and says so where there is none; where the two lie on
+/// one another it draws the reference alone.
+#[test]
+fn the_picture_shows_the_way_with_the_planners_margin() {
+    let dir = std::env::temp_dir().join(format!("sim-host-margin-{}", std::process::id()));
+    let svg = dir.join("pic.svg");
+    let figures = |pic: &str| {
+        let at = pic
+            .find(r#"<text x="10" y="48""#)
+            .expect("the figures line");
+        pic[at..].lines().next().unwrap_or_default().to_string()
+    };
+
+    let round = gap_world(&dir, "round", (0.0, 6.0));
+    let text = sim_host(&["run", "--planner", "apf", "--svg"], &[&svg, &round]);
+    let wider = text.lines().find(|l| l.starts_with("with_margin")).unwrap();
+    let wider_m: f64 = wider.split_whitespace().nth(1).unwrap().parse().unwrap();
+    assert!(wider_m > 5.2, "{text}");
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert!(pic.contains(">with margin</text>"), "the legend names it");
+    assert!(pic.contains(r##"stroke="#1b7c83""##), "and it is drawn");
+    let line = figures(&pic);
+    let drawn_m: f64 = line
+        .split(" m with the margin)")
+        .next()
+        .and_then(|l| l.rsplit('(').next())
+        .and_then(|m| m.parse().ok())
+        .unwrap_or_else(|| panic!("{line}"));
+    assert!((drawn_m - wider_m).abs() < 0.006, "{line} against {wider}");
+
+    let shut = gap_world(&dir, "shut", (1.9, 4.1));
+    let text = sim_host(&["run", "--planner", "apf", "--svg"], &[&svg, &shut]);
+    assert!(text.contains("with_margin  none"), "{text}");
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert!(!pic.contains(">with margin</text>"));
+    assert!(figures(&pic).contains("(no way with the margin)"));
+
+    sim_host(&["run", "--planner", "apf", "--svg"], &[&svg, &corridor()]);
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    assert!(!pic.contains(">with margin</text>"));
+    assert!(!figures(&pic).contains("margin"), "{}", figures(&pic));
+    std::fs::remove_dir_all(&dir).ok();
+}
