@@ -8,6 +8,10 @@ use crate::scenario::Scenario;
 use crate::sim::RunResult;
 use std::fmt::Write;
 
+/// The map's longer side, and the least width of the picture (the title,
+/// the figures line and the legend fit it), px.
+const MAP_PX: f64 = 900.0;
+
 /// How much longer than the reference the way with the planners' margin
 /// must be to be drawn (in most worlds the two lie on one another).
 const MARGIN_DRAWN_ABOVE: f64 = 1.01;
@@ -25,26 +29,29 @@ pub fn render(
 ) -> String {
     let [x0, y0, x1, y1] = sc.bounds;
     let (w, h) = (x1 - x0, y1 - y0);
-    let scale = 900.0 / w.max(h);
+    let scale = MAP_PX / w.max(h);
     let (pw, ph) = (w * scale, h * scale);
+    // A tall world (BARN's) is narrower than the title, the figures line
+    // and the legend: the picture keeps their width, the map in its middle.
+    let width = pw.max(MAP_PX);
+    let ox = (width - pw) / 2.0;
     let legend_h = 86.0;
-    let px = |p: V2| ((p.x - x0) * scale, (y1 - p.y) * scale + legend_h);
+    let px = |p: V2| ((p.x - x0) * scale + ox, (y1 - p.y) * scale + legend_h);
     let mut s = String::new();
     let _ = writeln!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{:.0}" height="{:.0}" viewBox="0 0 {pw:.1} {:.1}" font-family="sans-serif">"#,
-        pw,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{:.0}" viewBox="0 0 {width:.1} {:.1}" font-family="sans-serif">"#,
         ph + legend_h,
         ph + legend_h
     );
     let _ = writeln!(
         s,
-        r##"<rect x="0" y="0" width="{pw:.1}" height="{:.1}" fill="#fff"/>"##,
+        r##"<rect x="0" y="0" width="{width:.1}" height="{:.1}" fill="#fff"/>"##,
         ph + legend_h
     );
     let _ = writeln!(
         s,
-        r##"<rect x="0" y="{legend_h}" width="{pw:.1}" height="{ph:.1}" fill="#fbfaf7" stroke="#333" stroke-width="3"/>"##
+        r##"<rect x="{ox:.1}" y="{legend_h}" width="{pw:.1}" height="{ph:.1}" fill="#fbfaf7" stroke="#333" stroke-width="3"/>"##
     );
     // Title and figures.
     let colour = match run.outcome.as_str() {
@@ -242,7 +249,7 @@ pub fn render(
             &route_item[..]
         })
         .collect();
-    let mut lx = pw - 10.0;
+    let mut lx = width - 10.0;
     for (c, label) in items.iter().rev() {
         lx -= 7.0 * label.len() as f64 + 22.0;
         let _ = writeln!(

@@ -363,3 +363,40 @@ fn the_picture_shows_the_way_with_the_planners_margin() {
     assert!(!figures(&pic).contains("margin"), "{}", figures(&pic));
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// A tall world (BARN's are 3.4 m by 9.6 m or so) draws a narrow map: the
+/// title, the figures line and the legend keep the picture's width, with the
+/// map in its middle, and nothing is drawn left of the picture's edge.
+#[test]
+fn a_tall_world_draws_its_legend_inside_the_picture() {
+    let dir = std::env::temp_dir().join(format!("sim-host-tall-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let tall = dir.join("tall.toml");
+    std::fs::write(
+        &tall,
+        "format = 1\nname = \"tall\"\nbounds = [0.0, 0.0, 2.0, 7.0]\n\
+         start = [1.0, 1.0]\ngoal = [1.0, 6.0]\nrobot_radius = 0.1\n\n\
+         [[circle]]\ncenter = [1.0, 3.5]\nradius = 0.3\n",
+    )
+    .unwrap();
+    let svg = dir.join("tall.svg");
+    sim_host(&["run", "--svg"], &[&svg, &tall]);
+    let pic = std::fs::read_to_string(&svg).unwrap();
+    let width: f64 = pic
+        .split("width=\"")
+        .nth(1)
+        .and_then(|w| w.split('"').next())
+        .and_then(|w| w.parse().ok())
+        .unwrap();
+    assert_eq!(width, 900.0, "{pic:.200}");
+    let xs: Vec<f64> = pic
+        .split(" x=\"")
+        .skip(1)
+        .filter_map(|x| x.split('"').next()?.parse().ok())
+        .collect();
+    assert!(xs.len() > 5, "{pic:.200}");
+    for x in xs {
+        assert!((0.0..width).contains(&x), "x = {x} outside 0..{width}");
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}
