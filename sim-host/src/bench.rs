@@ -143,13 +143,7 @@ fn run_loaded(
                     cfg.seed
                 ));
                 let wider = reference::with_margin(sc, margin_mm);
-                let pic = svg::render(
-                    sc,
-                    &res,
-                    cfg.planner.name(),
-                    refp.as_ref().map(|r| r.path.as_slice()),
-                    wider.as_ref().map(|r| r.path.as_slice()),
-                );
+                let pic = svg::render(sc, &res, cfg.planner.name(), refp.as_ref(), wider.as_ref());
                 if let Err(e) = std::fs::write(&out, pic) {
                     let mut f = failed.lock().unwrap_or_else(|p| p.into_inner());
                     f.get_or_insert_with(|| format!("{}: {e}", out.display()));

@@ -195,13 +195,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 }
             }
             if let Some(out) = svg_out {
-                let pic = svg::render(
-                    &sc,
-                    &res,
-                    planner.name(),
-                    refp.as_ref().map(|r| r.path.as_slice()),
-                    wider.as_ref().map(|r| r.path.as_slice()),
-                );
+                let pic = svg::render(&sc, &res, planner.name(), refp.as_ref(), wider.as_ref());
                 write(&out, &pic)?;
                 report += &format!("svg          {}\n", out.display());
             }

@@ -4,6 +4,7 @@
 //! planners' margin makes the way longer than the disc's, that way too.
 
 use crate::geom::V2;
+use crate::reference::Reference;
 use crate::scenario::Scenario;
 use crate::sim::RunResult;
 use std::fmt::Write;
@@ -24,8 +25,8 @@ pub fn render(
     sc: &Scenario,
     run: &RunResult,
     planner: &str,
-    reference: Option<&[V2]>,
-    with_margin: Option<&[V2]>,
+    reference: Option<&Reference>,
+    with_margin: Option<&Reference>,
 ) -> String {
     let [x0, y0, x1, y1] = sc.bounds;
     let (w, h) = (x1 - x0, y1 - y0);
@@ -66,20 +67,22 @@ pub fn render(
         xml(&sc.name),
         run.outcome.as_str()
     );
-    let length = |r: &[V2]| r.windows(2).map(|w| w[0].dist(w[1])).sum::<f64>();
     let mut ratio = reference
         .map(|r| {
-            let l = length(r);
-            format!(", {:.2}× the reference {:.2} m", run.path_length / l, l)
+            format!(
+                ", {:.2}× the reference {:.2} m",
+                run.path_length / r.length,
+                r.length
+            )
         })
         .unwrap_or_default();
     let margin_drawn = match (reference, with_margin) {
-        (Some(r), Some(m)) => length(m) > MARGIN_DRAWN_ABOVE * length(r),
+        (Some(r), Some(m)) => m.length > MARGIN_DRAWN_ABOVE * r.length,
         (None, Some(_)) => true,
         (_, None) => false,
     };
     match with_margin {
-        Some(m) if margin_drawn => ratio += &format!(" ({:.2} m with the margin)", length(m)),
+        Some(m) if margin_drawn => ratio += &format!(" ({:.2} m with the margin)", m.length),
         None if reference.is_some() => ratio += " (no way with the margin)",
         _ => {}
     }
@@ -134,7 +137,7 @@ pub fn render(
         let _ = writeln!(
             s,
             r##"<polyline points="{}" fill="none" stroke="#2da44e" stroke-width="2" stroke-dasharray="6 4" opacity="0.8"/>"##,
-            poly(r, &px)
+            poly(&r.path, &px)
         );
     }
     // The way with the planners' margin, where it is not the reference's.
@@ -142,7 +145,7 @@ pub fn render(
         let _ = writeln!(
             s,
             r##"<polyline points="{}" fill="none" stroke="#1b7c83" stroke-width="2" stroke-dasharray="1 4" stroke-linecap="round"/>"##,
-            poly(m, &px)
+            poly(&m.path, &px)
         );
     }
     // The route over the known map (planner `route`), and its waypoints.
