@@ -9,6 +9,7 @@
 pub mod avr;
 pub mod profile;
 pub mod stm32;
+pub mod stm32_profile;
 
 use planner_core::{AdcProfile, ConfigBuilder, Guard, Output, Planner, Point, Pose, RawCounts};
 use sim_host::geom::V2;

@@ -70,6 +70,34 @@ pub struct QemuRun {
     pub steps: Vec<(Answer, u32)>,
 }
 
+/// The `qemu` build's ELF (as [`run_traces`] last built it).
+pub fn qemu_elf() -> PathBuf {
+    repo_root().join("firmware-stm32/target/qemu/thumbv7em-none-eabihf/release/firmware-stm32")
+}
+
+/// QEMU for the netduinoplus2 running `elf`, instructions counted
+/// (`-icount shift=0`), semihosting on (the defmt log on stdout, and the
+/// exit).
+pub fn qemu_command(elf: &std::path::Path) -> Cmd {
+    let mut qemu = Cmd::new("qemu-system-arm");
+    qemu.args([
+        "-M",
+        "netduinoplus2",
+        "-nographic",
+        "-monitor",
+        "none",
+        "-serial",
+        "none",
+        "-semihosting-config",
+        "enable=on,target=native",
+        "-icount",
+        "shift=0",
+    ])
+    .arg("-kernel")
+    .arg(elf);
+    qemu
+}
+
 /// Build the `qemu` firmware with `traces` compiled in and run it.
 pub fn run_traces(traces: &[Trace]) -> QemuRun {
     let dir = repo_root().join("firmware-stm32");
@@ -92,25 +120,8 @@ pub fn run_traces(traces: &[Trace]) -> QemuRun {
         .expect("cargo for firmware-stm32")
         .success();
     assert!(ok, "firmware-stm32 qemu build failed");
-    let elf = dir.join("target/qemu/thumbv7em-none-eabihf/release/firmware-stm32");
-    let qemu = Cmd::new("qemu-system-arm")
-        .args([
-            "-M",
-            "netduinoplus2",
-            "-nographic",
-            "-monitor",
-            "none",
-            "-serial",
-            "none",
-        ])
-        .args([
-            "-semihosting-config",
-            "enable=on,target=native",
-            "-icount",
-            "shift=0",
-        ])
-        .arg("-kernel")
-        .arg(&elf)
+    let elf = qemu_elf();
+    let qemu = qemu_command(&elf)
         .stdin(Stdio::null())
         .output()
         .expect("qemu-system-arm (Debian qemu-system-arm)");

@@ -1,7 +1,8 @@
 //! Project tasks: `cargo xtask ci` runs every check the project has (the
 //! README's test command); `cargo xtask avr-report` and `cargo xtask
-//! stm32-report` print the firmware figures, `cargo xtask avr-profile` where
-//! the AVR step spends its cycles.
+//! stm32-report` print the firmware figures, `cargo xtask avr-profile` and
+//! `cargo xtask stm32-profile` where the AVR step spends its cycles and the
+//! STM32 step its instructions.
 //!
 //! `ci` installs what it needs on a fresh Debian machine of the project's
 //! kind: rustup targets and components always, Debian packages when it runs
@@ -280,8 +281,11 @@ fn main() {
         "avr-report" => report("avr-report"),
         "stm32-report" => report("stm32-report"),
         "avr-profile" => report("avr-profile"),
+        "stm32-profile" => report("stm32-profile"),
         _ => {
-            eprintln!("usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile>");
+            eprintln!(
+                "usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile|stm32-profile>"
+            );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
@@ -289,6 +293,7 @@ fn main() {
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
+            eprintln!("  stm32-profile where firmware-stm32's step spends its instructions (QEMU)");
             exit(2);
         }
     }

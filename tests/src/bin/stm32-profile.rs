@@ -1,0 +1,67 @@
+//! `cargo xtask stm32-profile`: where the STM32 firmware's planner step
+//! spends its instructions, over the standard traces (those of `cargo
+//! xtask stm32-report`); see [`rover_tests::stm32_profile`].
+
+use planner_core::AdcProfile;
+use rover_tests::stm32_profile::profile;
+use rover_tests::{mean_worst, standard_traces};
+
+fn print_table(title: &str, rows: &[(String, u64)], total: u64, per: u64) {
+    println!("\n{title}:");
+    for (name, n) in rows.iter().take(14) {
+        let pct = *n as f64 * 100.0 / total.max(1) as f64;
+        println!("{:>7}/step  {pct:>4.1}%  {name}", n / per.max(1));
+    }
+}
+
+fn main() {
+    let traces = standard_traces(AdcProfile::STM32_12BIT_3V3);
+    let p = profile(&traces);
+    let steps = p.counted.len() as u64;
+    let total: u64 = p.by_callee.iter().map(|(_, n)| n).sum();
+    let (mean, worst) = mean_worst(&p.counted);
+    let (timed_mean, timed_worst) = mean_worst(&p.timed);
+    println!(
+        "stm32 profile: {steps} steps, mean {mean} worst {worst} instructions (the firmware counted mean {timed_mean} worst {timed_worst})"
+    );
+    print_table(
+        "by what the step calls (inlined or not)",
+        &p.by_callee,
+        total,
+        steps,
+    );
+    print_table(
+        "by the function the code was written in (innermost inlined frame)",
+        &p.by_source,
+        total,
+        steps,
+    );
+    print_table(
+        "by symbol (where the instruction is)",
+        &p.by_symbol,
+        total,
+        steps,
+    );
+    let (i, w) = &p.worst;
+    let names: Vec<(&str, usize)> = traces
+        .iter()
+        .flat_map(|t| (0..t.frames.len()).map(move |f| (t.name.as_str(), f)))
+        .collect();
+    let (name, frame) = names.get(*i).copied().unwrap_or(("?", 0));
+    print_table(
+        &format!(
+            "the worst step ({} instructions; {name}, frame {frame}), by what it calls",
+            p.counted[*i]
+        ),
+        w,
+        p.counted[*i] as u64,
+        1,
+    );
+    if p.mismatches > 0 {
+        eprintln!(
+            "stm32-profile: {} steps differ from the host core",
+            p.mismatches
+        );
+        std::process::exit(1);
+    }
+}
