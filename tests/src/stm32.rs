@@ -98,6 +98,18 @@ pub fn qemu_command(elf: &std::path::Path) -> Cmd {
     qemu
 }
 
+impl QemuRun {
+    /// Steps whose answer differs from the host core's in `traces` (and
+    /// steps one side has and the other has not).
+    pub fn mismatches(&self, traces: &[Trace]) -> usize {
+        let want: Vec<_> = traces.iter().flat_map(|t| t.outputs.iter()).collect();
+        let differ = (self.steps.iter().zip(&want))
+            .filter(|((got, _), w)| got != **w)
+            .count();
+        differ + want.len().abs_diff(self.steps.len())
+    }
+}
+
 /// Build the `qemu` firmware with `traces` compiled in and run it.
 pub fn run_traces(traces: &[Trace]) -> QemuRun {
     let dir = repo_root().join("firmware-stm32");

@@ -108,14 +108,7 @@ fn sorted(map: HashMap<String, u64>) -> Vec<(String, u64)> {
 /// with QEMU's instruction log).
 pub fn profile(traces: &[Trace]) -> Profile {
     let run = run_traces(traces);
-    let want: Vec<_> = traces.iter().flat_map(|t| t.outputs.iter()).collect();
-    let mismatches = run
-        .steps
-        .iter()
-        .zip(&want)
-        .filter(|((got, _), w)| got != **w)
-        .count()
-        + want.len().abs_diff(run.steps.len());
+    let mismatches = run.mismatches(traces);
     let elf = qemu_elf();
     let log = elf.with_file_name("qemu-exec.log");
     let ok = qemu_command(&elf)

@@ -11,14 +11,7 @@ fn main() {
     let (text, data, bss) = elf_size(&board_elf());
     let traces = standard_traces(AdcProfile::STM32_12BIT_3V3);
     let run = run_traces(&traces);
-    let want: Vec<_> = traces.iter().flat_map(|t| t.outputs.iter()).collect();
-    let mismatches = run
-        .steps
-        .iter()
-        .zip(&want)
-        .filter(|((got, _), w)| got != **w)
-        .count()
-        + want.len().abs_diff(run.steps.len());
+    let mismatches = run.mismatches(&traces);
     let counts: Vec<u32> = run.steps.iter().map(|&(_, t)| instructions(t)).collect();
     let (mean, worst) = mean_worst(&counts);
     println!("stm32 size: text={text} data={data} bss={bss}");
