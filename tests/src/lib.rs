@@ -290,3 +290,43 @@ pub fn parse_size(output: &str) -> Option<(u32, u32, u32)> {
         _ => None,
     }
 }
+
+/// Print how many of `counts` fall at or below each of `bounds` (in
+/// order, the last `u32::MAX`) and above the one before: the profilers'
+/// split of the steps against a budget and an aim.
+pub fn print_by_bounds(counts: &[u32], bounds: &[u32]) {
+    let (mut prev, mut below) = (0, 0);
+    for &hi in bounds {
+        let n = counts.iter().filter(|&&c| c <= hi).count() - below;
+        below += n;
+        let range = match (prev, hi) {
+            (0, _) => format!("up to {hi}"),
+            (_, u32::MAX) => format!("above {prev}"),
+            _ => format!("{} to {hi}", prev + 1),
+        };
+        println!("{n:>7} steps  {range}");
+        prev = hi;
+    }
+}
+
+/// Print the mean and worst of `counts` for the steps on the spot of the
+/// step before and for those somewhere new (`new`, from
+/// [`at_new_position`]), and how many of each are over `budget`: a turn
+/// on the spot keeps the answers that depend on the position only.
+pub fn print_by_position(counts: &[u32], new: &[bool], budget: u32) {
+    for (label, want) in [
+        ("on the spot of the step before", false),
+        ("somewhere new", true),
+    ] {
+        let c: Vec<u32> = (counts.iter().zip(new))
+            .filter(|(_, &n)| n == want)
+            .map(|(&c, _)| c)
+            .collect();
+        let (mean, worst) = mean_worst(&c);
+        let over = c.iter().filter(|&&c| c > budget).count();
+        println!(
+            "{:>7} steps  {label}: mean {mean}, worst {worst}, {over} over {budget}",
+            c.len()
+        );
+    }
+}

@@ -5,7 +5,7 @@
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
 use rover_tests::profile::profile;
-use rover_tests::{at_new_position, mean_worst, standard_traces};
+use rover_tests::{at_new_position, print_by_bounds, print_by_position, standard_traces};
 
 fn main() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
@@ -39,37 +39,11 @@ fn main() {
     // How the steps stand against issue 5's budget (8,000) and aim (3,000).
     println!("\nsteps by cycles (as the firmware timed them):");
     let bounds = [3_000, 8_000, 15_000, 20_000, 25_000, u32::MAX];
-    let (mut prev, mut below) = (0, 0);
-    for hi in bounds {
-        let n = p.step_cycles.iter().filter(|&&c| c <= hi).count() - below;
-        below += n;
-        let range = match (prev, hi) {
-            (0, _) => format!("up to {hi}"),
-            (_, u32::MAX) => format!("above {prev}"),
-            _ => format!("{} to {hi}", prev + 1),
-        };
-        println!("{n:>7} steps  {range}");
-        prev = hi;
-    }
+    print_by_bounds(&p.step_cycles, &bounds);
     // Where the budget is missed: a turn on the spot keeps the answers that
     // depend on the position only; a step somewhere new works them out.
     println!("\nsteps by where the rover stands (as the firmware timed them):");
-    let new = at_new_position(&traces);
-    for (label, want) in [
-        ("on the spot of the step before", false),
-        ("somewhere new", true),
-    ] {
-        let c: Vec<u32> = (p.step_cycles.iter().zip(&new))
-            .filter(|(_, &n)| n == want)
-            .map(|(&c, _)| c)
-            .collect();
-        let (mean, worst) = mean_worst(&c);
-        let over = c.iter().filter(|&&c| c > 8_000).count();
-        println!(
-            "{:>7} steps  {label}: mean {mean}, worst {worst}, {over} over 8000",
-            c.len()
-        );
-    }
+    print_by_position(&p.step_cycles, &at_new_position(&traces), 8_000);
     let o = &p.operands;
     let muls: u64 = o.mul.iter().sum();
     let pct = |n: u64, of: u64| n as f64 * 100.0 / of.max(1) as f64;

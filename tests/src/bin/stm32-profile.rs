@@ -4,7 +4,9 @@
 
 use planner_core::AdcProfile;
 use rover_tests::stm32_profile::profile;
-use rover_tests::{at_new_position, mean_worst, standard_traces};
+use rover_tests::{
+    at_new_position, mean_worst, print_by_bounds, print_by_position, standard_traces,
+};
 
 fn print_table(title: &str, rows: &[(String, u64)], total: u64, per: u64) {
     println!("\n{title}:");
@@ -61,31 +63,9 @@ fn main() {
     // beyond it (1,500), and where the rover stands: a turn on the spot
     // keeps the answers that depend on the position only.
     println!("\nsteps by instructions (as counted here):");
-    let (mut lo, mut below) = (0, 0);
-    for hi in [1_500, 2_000, 2_500, 3_000, u32::MAX] {
-        let n = p.counted.iter().filter(|&&c| c <= hi).count() - below;
-        below += n;
-        let range = match (lo, hi) {
-            (0, _) => format!("up to {hi}"),
-            (_, u32::MAX) => format!("above {lo}"),
-            _ => format!("{} to {hi}", lo + 1),
-        };
-        println!("{n:>7} steps  {range}");
-        lo = hi;
-    }
+    print_by_bounds(&p.counted, &[1_500, 2_000, 2_500, 3_000, u32::MAX]);
     println!("\nsteps by where the rover stands:");
-    let new = at_new_position(&traces);
-    for (label, want) in [
-        ("on the spot of the step before", false),
-        ("somewhere new", true),
-    ] {
-        let c: Vec<u32> = (p.counted.iter().zip(&new))
-            .filter(|(_, &n)| n == want)
-            .map(|(&c, _)| c)
-            .collect();
-        let (mean, worst) = mean_worst(&c);
-        println!("{:>7} steps  {label}: mean {mean}, worst {worst}", c.len());
-    }
+    print_by_position(&p.counted, &at_new_position(&traces), 3_000);
     if p.mismatches > 0 {
         eprintln!(
             "stm32-profile: {} steps differ from the host core",
