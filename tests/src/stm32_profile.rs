@@ -41,6 +41,9 @@ pub struct Profile {
     pub by_source: Vec<(String, u64)>,
     /// The worst step's index and its split by what the step called.
     pub worst: (usize, Vec<(String, u64)>),
+    /// The worst step by what the step called and, within that, the
+    /// function the code was written in (`callee > source`).
+    pub worst_detail: Vec<(String, u64)>,
 }
 
 /// The step's own code, in the tables.
@@ -179,14 +182,14 @@ pub fn profile(traces: &[Trace]) -> Profile {
     let mut by_callee = HashMap::new();
     let mut by_source = HashMap::new();
     let mut counted = Vec::new();
-    let mut worst = (0, HashMap::new());
+    let mut worst = (0, HashMap::new(), HashMap::new());
     let mut worst_count = 0;
     for (i, s) in steps.iter().enumerate() {
         let mut here: HashMap<(u32, usize, u32), u64> = HashMap::new();
         for &k in s {
             *here.entry(k).or_insert(0) += 1;
         }
-        let mut this = HashMap::new();
+        let (mut this, mut detail) = (HashMap::new(), HashMap::new());
         for ((pc, id, site), count) in here {
             let sym = &symbols[id];
             let d = format!("{:#}", rustc_demangle::demangle(sym));
@@ -201,6 +204,7 @@ pub fn profile(traces: &[Trace]) -> Profile {
                 site_callee.unwrap_or_else(|| strip_hash(&d).to_string())
             };
             *by_symbol.entry(strip_hash(&d).to_string()).or_insert(0u64) += count;
+            *detail.entry(format!("{key} > {source}")).or_insert(0u64) += count;
             *by_source.entry(source).or_insert(0u64) += count;
             *this.entry(key).or_insert(0u64) += count;
         }
@@ -211,7 +215,7 @@ pub fn profile(traces: &[Trace]) -> Profile {
         }
         if n > worst_count {
             worst_count = n;
-            worst = (i, this);
+            worst = (i, this, detail);
         }
     }
     Profile {
@@ -222,5 +226,6 @@ pub fn profile(traces: &[Trace]) -> Profile {
         by_callee: sorted(by_callee),
         by_source: sorted(by_source),
         worst: (worst.0, sorted(worst.1)),
+        worst_detail: sorted(worst.2),
     }
 }

@@ -62,6 +62,10 @@ fn main() {
     // How the steps stand against issue 6's budget (3,000) and the aim
     // beyond it (1,500), and where the rover stands: a turn on the spot
     // keeps the answers that depend on the position only.
+    println!("\nthe worst step, by what it calls > where the code was written:");
+    for (name, n) in p.worst_detail.iter().take(24) {
+        println!("{n:>7}  {name}");
+    }
     println!("\nsteps by instructions (as counted here):");
     print_by_bounds(&p.counted, &[1_500, 2_000, 2_500, 3_000, u32::MAX]);
     println!("\nsteps by where the rover stands:");
