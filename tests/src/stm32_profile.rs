@@ -114,14 +114,21 @@ pub fn profile(traces: &[Trace]) -> Profile {
     let mismatches = run.mismatches(traces);
     let elf = qemu_elf();
     let log = elf.with_file_name("qemu-exec.log");
-    let ok = qemu_command(&elf)
-        .args(["-singlestep", "-d", "exec,nochain", "-D"])
-        .arg(&log)
-        .stdin(Stdio::null())
-        .stdout(Stdio::null())
-        .status()
-        .expect("qemu-system-arm")
-        .success();
+    // One instruction per translation block: `-singlestep` up to QEMU 8,
+    // `one-insn-per-tb` from 8.1 on (where `-singlestep` went away).
+    let logged = |one_per_tb: &[&str]| {
+        qemu_command(&elf)
+            .args(one_per_tb)
+            .args(["-d", "exec,nochain", "-D"])
+            .arg(&log)
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::null())
+            .status()
+            .expect("qemu-system-arm")
+            .success()
+    };
+    let ok = logged(&["-singlestep"]) || logged(&["-accel", "tcg,one-insn-per-tb=on"]);
     assert!(ok, "qemu with the instruction log failed");
     let mut names = Names {
         loader: Loader::new(&elf).expect("the qemu build's debug info"),
