@@ -330,3 +330,16 @@ pub fn print_by_position(counts: &[u32], new: &[bool], budget: u32) {
         );
     }
 }
+
+/// Print the first `rows` of a profiler's table (`name`, count over all
+/// steps) as a count per step (`per`) and a share of `total`.
+pub fn print_table(title: &str, table: &[(String, u64)], total: u64, per: u64, rows: usize) {
+    println!("\n{title}:");
+    for (name, c) in table.iter().take(rows) {
+        println!(
+            "{:>7}/step {:>5.1}%  {name}",
+            c / per.max(1),
+            *c as f64 * 100.0 / total.max(1) as f64
+        );
+    }
+}

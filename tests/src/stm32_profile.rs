@@ -21,7 +21,7 @@ use std::io::{BufRead, BufReader};
 use std::process::Stdio;
 
 /// What [`profile`] found.
-#[derive(Debug, Default)]
+#[derive(Debug)]
 pub struct Profile {
     /// Instructions of each step as counted here (the span less the empty
     /// span's), in replay order.

@@ -1,6 +1,6 @@
 //! The instruction profiler (`cargo xtask stm32-profile`) accounts for the
 //! steps the STM32 firmware counts itself: the same steps, the same
-//! instructions (to the SysTick tick the firmware's count is rounded to),
+//! instructions (within two of the SysTick ticks the firmware counts in),
 //! every instruction charged once in each table.
 
 use planner_core::AdcProfile;

@@ -5,7 +5,9 @@
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
 use rover_tests::profile::profile;
-use rover_tests::{at_new_position, print_by_bounds, print_by_position, standard_traces};
+use rover_tests::{
+    at_new_position, print_by_bounds, print_by_position, print_table, standard_traces,
+};
 
 fn main() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
@@ -22,12 +24,14 @@ fn main() {
         &p.by_function,
         p.cycles,
         steps,
+        25,
     );
     print_table(
         "by what the step calls (callees included)",
         &p.by_callee,
         p.cycles,
         steps,
+        25,
     );
     let (worst, w) = &p.worst;
     print_table(
@@ -35,6 +39,7 @@ fn main() {
         w,
         *worst,
         1,
+        25,
     );
     // How the steps stand against issue 5's budget (8,000) and aim (3,000).
     println!("\nsteps by cycles (as the firmware timed them):");
@@ -67,16 +72,5 @@ fn main() {
     println!("\nthe costliest instructions (avr-objdump -d the ELF to read them):");
     for (a, name, c) in p.by_address.iter().take(12) {
         println!("{:>7}/step  0x{a:04x}  {name}", c / steps);
-    }
-}
-
-fn print_table(title: &str, v: &[(String, u64)], total: u64, steps: u64) {
-    println!("\n{title}:");
-    for (name, c) in v.iter().take(25) {
-        println!(
-            "{:>7}/step {:>5.1}%  {name}",
-            c / steps,
-            *c as f64 * 100.0 / total.max(1) as f64
-        );
     }
 }

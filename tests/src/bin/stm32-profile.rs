@@ -5,16 +5,8 @@
 use planner_core::AdcProfile;
 use rover_tests::stm32_profile::profile;
 use rover_tests::{
-    at_new_position, mean_worst, print_by_bounds, print_by_position, standard_traces,
+    at_new_position, mean_worst, print_by_bounds, print_by_position, print_table, standard_traces,
 };
-
-fn print_table(title: &str, rows: &[(String, u64)], total: u64, per: u64) {
-    println!("\n{title}:");
-    for (name, n) in rows.iter().take(14) {
-        let pct = *n as f64 * 100.0 / total.max(1) as f64;
-        println!("{:>7}/step  {pct:>4.1}%  {name}", n / per.max(1));
-    }
-}
 
 fn main() {
     let traces = standard_traces(AdcProfile::STM32_12BIT_3V3);
@@ -31,18 +23,21 @@ fn main() {
         &p.by_callee,
         total,
         steps,
+        14,
     );
     print_table(
         "by the function the code was written in (innermost inlined frame)",
         &p.by_source,
         total,
         steps,
+        14,
     );
     print_table(
         "by symbol (where the instruction is)",
         &p.by_symbol,
         total,
         steps,
+        14,
     );
     let (i, w) = &p.worst;
     let names: Vec<(&str, usize)> = traces
@@ -58,14 +53,15 @@ fn main() {
         w,
         p.counted[*i] as u64,
         1,
+        14,
     );
-    // How the steps stand against issue 6's budget (3,000) and the aim
-    // beyond it (1,500), and where the rover stands: a turn on the spot
-    // keeps the answers that depend on the position only.
     println!("\nthe worst step, by what it calls > where the code was written:");
     for (name, n) in p.worst_detail.iter().take(24) {
         println!("{n:>7}  {name}");
     }
+    // How the steps stand against issue 6's budget (3,000) and the aim
+    // beyond it (1,500), and where the rover stands: a turn on the spot
+    // keeps the answers that depend on the position only.
     println!("\nsteps by instructions (as counted here):");
     print_by_bounds(&p.counted, &[1_500, 2_000, 2_500, 3_000, u32::MAX]);
     println!("\nsteps by where the rover stands:");
