@@ -48,8 +48,13 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
     loop {}
 }
 
-fn status_letter(s: Status) -> &'static str {
-    ["M", "A", "U", "F"][s.code() as usize % 4]
+fn status_letter(s: Status) -> char {
+    match s {
+        Status::Moving => 'M',
+        Status::Arrived => 'A',
+        Status::Unreachable => 'U',
+        Status::SensorFault => 'F',
+    }
 }
 
 /// Enable the watchdog: reset after 0.5 s without `wdr`.

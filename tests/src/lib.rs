@@ -8,6 +8,7 @@
 
 pub mod avr;
 pub mod profile;
+pub mod stack_bound;
 pub mod stm32;
 pub mod stm32_profile;
 
