@@ -27,7 +27,7 @@ mod stack;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::protocol::{self, Request};
-use planner_core::{Angle, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status};
+use planner_core::{Angle, Config, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status};
 use serial::Serial;
 use ufmt::uwriteln;
 
@@ -116,15 +116,6 @@ fn replay(dp: &board::Dp, planner: &mut Planner) {
     adc::start(dp);
 }
 
-/// The planner with the default configuration (from flash, see
-/// [`progmem`]). Not inlined: the configuration's copy then lives in this
-/// frame, which is gone before `main` goes on, instead of in `main`'s for
-/// ever (RAM is 2 KB).
-#[inline(never)]
-fn new_planner() -> Planner {
-    Planner::new(progmem::config(), Point::new(0, 0))
-}
-
 #[avr_device::entry]
 fn main() -> ! {
     stack::paint();
@@ -151,8 +142,12 @@ fn main() -> ! {
 
     let mut out = Serial;
     // Used in place (by reference), never moved: a move is a second
-    // 1 KB copy on the stack.
-    let mut planner = new_planner();
+    // 1 KB copy on the stack. Built with no configuration, then the
+    // default one loaded out of flash over it (see `progmem`): a
+    // configuration built as a value was a 480-byte copy on the stack, its
+    // deepest point (`tests/src/stack_bound.rs`).
+    let mut planner = Planner::new(Config::UNSET, Point::new(0, 0));
+    planner.load_config(progmem::load_config);
     let planner = &mut planner;
     let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
     let mut executor = Executor::new(ExecutorConfig::default());

@@ -76,6 +76,46 @@ pub struct Config {
 }
 
 impl Config {
+    /// No configuration, to be written over in place
+    /// ([`crate::Planner::load_config`]): all zeros, so that a planner built
+    /// with it is a `memset` of its place on the AVR, not a copy of constant
+    /// data (which the AVR keeps in RAM). A planner stepped with it all
+    /// the same stays put: with no calibration no count reads as a free
+    /// way, so every step is 0 mm and the guard stops.
+    pub const UNSET: Config = Config {
+        robot_radius_mm: 0,
+        sensor_offset_mm: 0,
+        sensor_range_mm: 0,
+        sensor_angles: [Angle(0); SENSOR_COUNT],
+        sensor_dirs: [Dir { c: 0, s: 0 }; SENSOR_COUNT],
+        corridor_mm: [0; SENSOR_COUNT],
+        xi_att: 0,
+        xi_mp: 0,
+        xi_sen: 0,
+        goal_tolerance_mm: 0,
+        clearance_mm: 0,
+        standoff_mm: 0,
+        min_step_mm: 0,
+        diagonal_tolerance: Angle(0),
+        direct_tolerance: Angle(0),
+        escape: crate::escape::EscapeConfig {
+            enabled: false,
+            window_steps: 0,
+            stuck_mm: 0,
+            crumb_mm: 0,
+            revisit_mm: 0,
+            progress_mm: 0,
+            radius_mm: 0,
+            k_v: 0,
+            give_up_drops: 0,
+            give_up_steps: 0,
+            retreat_mm: 0,
+            retreat_per_drop_mm: 0,
+            follow: false,
+        },
+        calibration: [Calibration::UNSET; SENSOR_COUNT],
+    };
+
     /// Robot radius, mm.
     pub fn robot_radius_mm(&self) -> u16 {
         self.robot_radius_mm

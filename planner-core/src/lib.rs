@@ -171,6 +171,11 @@ const _: () = assert!(core::mem::offset_of!(Planner, fold_back) <= 64);
 
 impl Planner {
     /// A planner heading for `goal`.
+    ///
+    /// Always inlined on the AVR: built in its caller's place, not in a
+    /// frame of its own and then copied (a planner is over 1 KB of its
+    /// 2 KB of RAM; [`Planner::load_config`]).
+    #[cfg_attr(target_arch = "avr", inline(always))]
     pub fn new(config: Config, goal: Point) -> Self {
         let range = config.sensor_range_mm;
         Planner {
@@ -197,6 +202,20 @@ impl Planner {
             came_from: None,
             backing_out: false,
         }
+    }
+
+    /// Write a configuration over this planner's, in place, and start
+    /// afresh (as [`Planner::set_goal`] does, same goal). For a target that
+    /// cannot read a [`Config`] where it keeps it (the AVR's program
+    /// memory): built with [`Planner::new`] from a copy, the copy sits on
+    /// the stack beside the planner, and on the ATmega328P that was the
+    /// stack's deepest point (515 bytes more; `tests/src/stack_bound.rs`).
+    /// Build the planner with [`Config::UNSET`], then load. `load` must
+    /// leave a configuration a [`ConfigBuilder`] built (the AVR firmware
+    /// copies the bytes of one, which the compiler checked).
+    pub fn load_config(&mut self, load: impl FnOnce(&mut Config)) {
+        load(&mut self.config);
+        self.set_goal(self.goal);
     }
 
     /// A new goal: forgets the memory, virtual obstacles, the guard's flank
@@ -799,6 +818,53 @@ mod tests {
             .gains_q10(config::MAX_GAIN + 1, FORCE_ONE, FORCE_ONE)
             .build()
             .is_err());
+    }
+
+    #[test]
+    fn a_planner_loaded_in_place_is_the_one_new_builds() {
+        // The same answers, step and guard, over a wandering run of odd
+        // counts (a small linear congruential sequence, so the test is
+        // the same every time). Fails if `load_config` keeps anything
+        // `new` worked out from the unset one.
+        let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .sensor_range_mm(700)
+            .build()
+            .unwrap();
+        let goal = Point::new(1_500, -800);
+        let mut a = Planner::new(cfg, goal);
+        let mut b = Planner::new(Config::UNSET, goal);
+        b.load_config(|c| *c = cfg);
+        assert_eq!(a.config(), b.config());
+        let mut seed = 12_345u32;
+        let mut next = |m: u32| {
+            seed = seed.wrapping_mul(1_103_515_245).wrapping_add(12_345);
+            (seed >> 16) % m
+        };
+        for _ in 0..400 {
+            let raw: RawCounts = core::array::from_fn(|_| 40 + next(560) as u16);
+            let pose = at(
+                next(2_000) as i16 - 200,
+                next(1_600) as i16 - 1_200,
+                next(360) as i16,
+            );
+            let remaining = next(500) as u16;
+            assert_eq!(a.guard_raw(&raw, remaining), b.guard_raw(&raw, remaining));
+            assert_eq!(a.step_raw(pose, &raw), b.step_raw(pose, &raw));
+        }
+    }
+
+    #[test]
+    fn a_planner_with_no_configuration_stays_put() {
+        // `Config::UNSET` before a load: whatever the counts and the pose,
+        // no step, and the guard stops.
+        let mut p = Planner::new(Config::UNSET, Point::new(1_000, 0));
+        for c in (0..=1_100u16).step_by(7).chain([u16::MAX]) {
+            for raw in [[c; 5], [FAR, c, FAR, c, FAR]] {
+                let out = p.step_raw(at(c as i16 % 500, 0, c as i16), &raw);
+                assert_eq!(out.command.step_mm, 0, "{raw:?}: {out:?}");
+                assert_eq!(p.guard_raw(&raw, 100), Guard::Stop, "{raw:?}");
+            }
+        }
     }
 
     #[test]

@@ -144,6 +144,16 @@ pub struct Calibration {
 }
 
 impl Calibration {
+    /// All zeros: part of [`crate::config::Config::UNSET`].
+    pub(crate) const UNSET: Calibration = Calibration {
+        shift: 0,
+        full_scale: 0,
+        near_count: 0,
+        far_count: 0,
+        floor_count: 0,
+        mm: [0; CAL_BINS + 1],
+    };
+
     /// Build from measured `(count, mm)` points, in any order of input but
     /// strictly monotonic: a higher count is a nearer object.
     ///
