@@ -195,6 +195,20 @@ impl Graph {
         Ok(w)
     }
 
+    /// Every function `i` may run, itself included.
+    fn reachable(&self, i: usize) -> Result<Vec<usize>, String> {
+        let (mut seen, mut todo) = (vec![i], vec![i]);
+        while let Some(f) = todo.pop() {
+            for (c, _) in self.callees(f)? {
+                if !seen.contains(&c) {
+                    seen.push(c);
+                    todo.push(c);
+                }
+            }
+        }
+        Ok(seen)
+    }
+
     fn bound(&self) -> Result<StackBound, String> {
         let entry = *self.by_name.get("main").ok_or("no `main` in the image")?;
         let mut memo = HashMap::new();
@@ -204,14 +218,15 @@ impl Graph {
             if !f.name.starts_with("__vector_") {
                 continue;
             }
-            let (d, chain) = self.worst(i, &mut Vec::new(), &mut memo)?;
-            if let Some(s) = chain
-                .iter()
-                .find(|&&c| self.functions[c].code.iter().any(|(_, op, _)| op == "sei"))
+            let (d, _) = self.worst(i, &mut Vec::new(), &mut memo)?;
+            if let Some(s) = self
+                .reachable(i)?
+                .into_iter()
+                .find(|&c| self.functions[c].code.iter().any(|(_, op, _)| op == "sei"))
             {
                 return Err(format!(
                     "{} enables interrupts in {}: they may nest",
-                    f.name, self.functions[*s].name
+                    f.name, self.functions[s].name
                 ));
             }
             if d > interrupt.1 {
@@ -298,5 +313,12 @@ mod tests {
         assert!(Graph::parse(&recursive).bound().is_err());
         let nesting = LISTING.replace("     404:\tpush\tr24", "     404:\tsei");
         assert!(Graph::parse(&nesting).bound().is_err());
+        // The handler calls `a` (its deepest chain) and a shallow function
+        // that enables interrupts, off that chain.
+        let nesting_below = LISTING.replace(
+            "     406:\treti",
+            "     406:\tcall\t0x200\t; 0x200 <a>\n     40a:\tcall\t0x500\t; 0x500 <e>\n     40e:\treti\n\n00000500 <e>:\n     500:\tsei\n     502:\tret",
+        );
+        assert!(Graph::parse(&nesting_below).bound().is_err());
     }
 }
