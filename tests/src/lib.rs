@@ -344,3 +344,11 @@ pub fn print_table(title: &str, table: &[(String, u64)], total: u64, per: u64, r
         );
     }
 }
+
+/// A profiler's table (name, count) with the largest counts first, equal
+/// counts by name.
+pub fn sorted(table: std::collections::HashMap<String, u64>) -> Vec<(String, u64)> {
+    let mut v: Vec<_> = table.into_iter().collect();
+    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
+    v
+}

@@ -14,7 +14,7 @@
 //! drives simavr through `simavr-ffi` itself.
 
 use crate::avr::{replay_answer, replay_frame, F_CPU, REPLAY_ANSWER_LEN};
-use crate::Trace;
+use crate::{sorted, Trace};
 use simavr_ffi as ffi;
 use std::collections::{HashMap, VecDeque};
 use std::ffi::CString;
@@ -439,12 +439,6 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
         unbalanced: sim.unbalanced,
         operands: sim.operands,
     }
-}
-
-fn sorted(m: HashMap<String, u64>) -> Vec<(String, u64)> {
-    let mut v: Vec<_> = m.into_iter().collect();
-    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-    v
 }
 
 /// The ELF's function symbols, demangled, by address.

@@ -14,7 +14,7 @@
 //! (`addr2line`'s inlined frames), not only by the symbol it lands in.
 
 use crate::stm32::{instructions, qemu_command, qemu_elf, run_traces};
-use crate::Trace;
+use crate::{sorted, Trace};
 use addr2line::Loader;
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader};
@@ -98,12 +98,6 @@ impl Names {
             (source, callee)
         })
     }
-}
-
-fn sorted(map: HashMap<String, u64>) -> Vec<(String, u64)> {
-    let mut v: Vec<_> = map.into_iter().collect();
-    v.sort_by(|a, b| b.1.cmp(&a.1).then(a.0.cmp(&b.0)));
-    v
 }
 
 /// Profile the planner step over `traces` (built into the `qemu` firmware
