@@ -104,15 +104,17 @@ pub enum Guard {
 /// has seen free. Readings that are not trusted count as an obstacle at the
 /// sensor face. Never more than the front sensor's reach minus the disc.
 ///
-/// Stand-off: an obstacle in the corridor is also kept the sensors'
-/// minimum range (`standoff_mm`) beyond the sensor faces, so the rover never
-/// drives an obstacle into the fold-back region where it would read as far.
+/// Stand-off: an obstacle in the corridor is also kept `standoff_mm` beyond
+/// the rim ahead (by default the sensors' minimum range: sensors on the rim
+/// then never have an obstacle driven into the fold-back region, where it
+/// would read as far; set back, it keeps the body as far off).
 pub fn free_distance_mm(cfg: &Config, readings: &Readings, relative: Angle) -> u16 {
     free_way_mm(cfg, readings, None, relative)
 }
 
-/// [`free_distance_mm`], and the disc, widened by a 20 mm margin only,
-/// kept off the flank points the guard saw beside the way (see [`Flank`]):
+/// [`free_distance_mm`], and the disc, widened by a 20 mm margin only (by
+/// the clearance with the sensors set back), kept off the flank points (see
+/// [`Flank`]):
 /// `flank` is the robot's position and heading and the points (world mm).
 pub fn free_way_mm(
     cfg: &Config,
@@ -122,7 +124,7 @@ pub fn free_way_mm(
 ) -> u16 {
     let rs = (cfg.robot_radius_mm + cfg.clearance_mm) as i32;
     let reach = (cfg.sensor_offset_mm + cfg.sensor_range_mm) as i32;
-    let standoff = (cfg.sensor_offset_mm + cfg.standoff_mm) as i32;
+    let standoff = (cfg.robot_radius_mm + cfg.standoff_mm) as i32;
     // The usual headings are a sensor's (straight ahead, a sector edge):
     // their sine and cosine are in the config already.
     let dir = match cfg.sensor_angles.iter().position(|&a| a == relative) {
@@ -171,7 +173,14 @@ pub fn free_way_mm(
     // The path's world direction once, rather than each point in the
     // robot's frame.
     let dir = dir.rotated(heading);
-    let rb = cfg.robot_radius_mm as i32 + FLANK_MARGIN_MM;
+    // With the sensors set back, the clearance: with 20 mm the benches met
+    // collisions that 40 mm do not (a beam reads one point of a face, and
+    // the face reaches on beyond it; docs/bench.md, "Sensors set back").
+    let rb = if cfg.set_back() {
+        rs
+    } else {
+        cfg.robot_radius_mm as i32 + FLANK_MARGIN_MM
+    };
     for &p in points {
         if free == 0 {
             break;
@@ -215,6 +224,10 @@ pub const FLANK_POINTS: usize = 4;
 /// puts them where no beam of the new view looks (see [`Flank`]).
 const FLANK_LATERAL_MM: i32 = 170;
 
+/// With the sensors set back, a beam's point within this of the rim (mm) in
+/// the planner's own view is a flank point too (see [`Flank::saw_near`]).
+const FLANK_NEAR_MM: u16 = 100;
+
 /// A flank point within this (mm, either axis) of a kept one replaces it:
 /// a beam sliding along a face leaves the last point it saw of it.
 const FLANK_MERGE_MM: u16 = 40;
@@ -225,8 +238,8 @@ const FLANK_MERGE_MM: u16 = 40;
 const FLANK_REACH_MM: u16 = 300;
 
 /// Margin (mm) beyond the robot radius that the step keeps from a flank
-/// point: less than the clearance, which would stop the rover beside
-/// what it has just passed.
+/// point with the sensors on the rim: less than the clearance, which would
+/// stop the rover beside what it has just passed.
 const FLANK_MARGIN_MM: i32 = 20;
 
 /// Ours (the safety rule's blind flank, docs/bench.md "The flank"): the
@@ -311,6 +324,48 @@ impl Flank {
         }
     }
 
+    /// With the sensors set back, the planner's view from `robot` facing
+    /// `heading` (its direction): a beam's point within [`FLANK_NEAR_MM`]
+    /// of the rim is kept too. Ours: turning back towards the force, the
+    /// rover loses sight of what its last view read beside it, and its
+    /// disc swept into a post 42 mm off the rim that the view before the
+    /// turn had read (barn-tight-243, seed 11, sensors set back). Only
+    /// ranged readings: "too close" has no position. The potential
+    /// field's step keeps them in its own loop over the collision points,
+    /// which places them anyway ([`Flank::saw_point`]).
+    pub(crate) fn saw_near(
+        &mut self,
+        cfg: &Config,
+        robot: Point,
+        heading: Dir,
+        readings: &Readings,
+    ) {
+        for (i, &r) in readings.iter().enumerate() {
+            if let Reading::Range(mm) = r {
+                let e = cfg.sensor_offset_mm + mm;
+                if is_near(cfg, r, e) {
+                    let p = robot.offset_dir(sensor_direction(cfg, heading, i), e);
+                    self.keep(p, robot);
+                }
+            }
+        }
+    }
+
+    /// One beam's point `at`, `distance_mm` from the centre `robot`, read
+    /// as `r`: kept as [`Flank::saw_near`] keeps it.
+    pub(crate) fn saw_point(
+        &mut self,
+        cfg: &Config,
+        r: Reading,
+        distance_mm: u16,
+        at: Point,
+        robot: Point,
+    ) {
+        if is_near(cfg, r, distance_mm) {
+            self.keep(at, robot);
+        }
+    }
+
     /// Keep `p`, seen with the rover at `centre`: it replaces a kept
     /// point near it (a beam sliding along a face leaves the last point it
     /// saw of it) or, all places taken, the kept point farthest from the
@@ -332,6 +387,12 @@ impl Flank {
             }
         }
     }
+}
+
+/// Whether a reading `r`, `distance_mm` from the centre, is a ranged one
+/// within [`FLANK_NEAR_MM`] of the rim (see [`Flank::saw_near`]).
+fn is_near(cfg: &Config, r: Reading, distance_mm: u16) -> bool {
+    matches!(r, Reading::Range(_)) && distance_mm <= cfg.robot_radius_mm + FLANK_NEAR_MM
 }
 
 /// The guard (§5): with fresh readings taken while advancing, may the robot
@@ -423,6 +484,54 @@ mod tests {
         let mut r = [Reading::Clear; SENSOR_COUNT];
         r[4] = Reading::Range(102);
         r
+    }
+
+    fn set_back() -> Config {
+        ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .sensors_set_back()
+            .build()
+            .unwrap()
+    }
+
+    #[test]
+    fn the_stand_off_is_kept_beyond_the_rim_wherever_the_sensors_sit() {
+        // The same obstacle 250 mm ahead of the centre: read 150 mm from a
+        // face on the rim, 250 mm from one at the centre. Either way the
+        // step stops 100 mm (the stand-off) short of the rim: 50 mm.
+        let mut rim = [Reading::Clear; SENSOR_COUNT];
+        rim[2] = Reading::Range(150);
+        assert_eq!(free_distance_mm(&cfg(), &rim, Angle::ZERO), 50);
+        let centre = set_back();
+        assert_eq!(centre.sensor_offset_mm(), 0);
+        let mut behind = [Reading::Clear; SENSOR_COUNT];
+        behind[2] = Reading::Range(250);
+        assert_eq!(free_distance_mm(&centre, &behind, Angle::ZERO), 50);
+    }
+
+    #[test]
+    #[cfg(feature = "set-back")]
+    fn set_back_the_view_keeps_what_it_reads_near_the_rim() {
+        let c = set_back();
+        let mut f = Flank::default();
+        // The +40° beam reads a post 150 mm from the centre (50 mm off the
+        // rim); the −40° one a wall 400 mm off: only the post is kept.
+        let mut r = [Reading::Clear; SENSOR_COUNT];
+        r[4] = Reading::Range(150);
+        r[0] = Reading::Range(400);
+        f.saw_near(&c, Point::new(0, 0), Dir::of(Angle::ZERO), &r);
+        assert_eq!(f.points().len(), 1);
+        let p = f.points()[0];
+        assert!((p.x - 115).abs() <= 1 && (p.y - 96).abs() <= 1, "{p:?}");
+        // Turned 80° left, the post is 40° right of the new heading, where
+        // no beam of this view looks beyond the ±40° of the last one...
+        let clear = [Reading::Clear; SENSOR_COUNT];
+        let left = Angle::from_deg(80);
+        let flank = Some((Point::new(0, 0), Dir::of(left), f.points()));
+        // ...yet the step along the −40° beam keeps the disc and the 40 mm
+        // clearance off it (set back; 20 mm on the rim): 150 − 140 mm.
+        let step = free_way_mm(&c, &clear, flank, Angle::from_deg(-40));
+        assert!((9..=11).contains(&step), "{step}");
+        assert!(free_way_mm(&c, &clear, None, Angle::from_deg(-40)) > 500);
     }
 
     #[test]
@@ -520,7 +629,7 @@ mod tests {
     /// to its stand-off and its chord limits.
     fn free_plain(c: &Config, readings: &Readings, relative: Angle) -> u16 {
         let rs = (c.robot_radius_mm + c.clearance_mm) as i32;
-        let standoff = (c.sensor_offset_mm + c.standoff_mm) as i32;
+        let standoff = (c.robot_radius_mm + c.standoff_mm) as i32;
         let dir = Dir::of(relative);
         let ends = readings
             .iter()

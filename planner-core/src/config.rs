@@ -9,7 +9,7 @@
 //! 4,116: `cargo xtask avr-report`, `cargo xtask stm32-report`).
 
 use crate::fixed::{Angle, Dir, FORCE_ONE};
-use crate::sensors::{AdcProfile, Calibration, CalibrationError, SENSOR_COUNT};
+use crate::sensors::{AdcProfile, Calibration, CalibrationError, FOLD_BACK_MM, SENSOR_COUNT};
 
 /// The largest gain (ξ_att, ξ_MP, ξ_sen) a configuration takes: 16 force
 /// units, Q10. The forces built from a gain rely on it (they scale a
@@ -73,6 +73,10 @@ pub struct Config {
     pub(crate) direct_tolerance: Angle,
     pub(crate) escape: crate::escape::EscapeConfig,
     pub(crate) calibration: [Calibration; SENSOR_COUNT],
+    /// The sensor faces are at least the sensors' minimum range
+    /// ([`FOLD_BACK_MM`]) behind the rim: see
+    /// [`ConfigBuilder::sensors_set_back`] for the rules this turns on.
+    pub(crate) set_back: bool,
 }
 
 impl Config {
@@ -114,7 +118,24 @@ impl Config {
             follow: false,
         },
         calibration: [Calibration::UNSET; SENSOR_COUNT],
+        set_back: false,
     };
+
+    /// Whether the planner follows the rules of sensors set back
+    /// ([`ConfigBuilder::sensors_set_back`]): their faces sit at least the
+    /// sensors' minimum range behind the rim, and planner-core is built
+    /// with its `set-back` feature.
+    pub fn sensors_set_back(&self) -> bool {
+        self.set_back()
+    }
+
+    /// [`Config::sensors_set_back`] for the planner's rules: without the
+    /// `set-back` feature a constant `false`, so that the firmwares, built
+    /// without it, hold none of their code.
+    #[inline(always)]
+    pub(crate) fn set_back(&self) -> bool {
+        cfg!(feature = "set-back") && self.set_back
+    }
 
     /// Robot radius, mm.
     pub fn robot_radius_mm(&self) -> u16 {
@@ -192,6 +213,7 @@ pub struct ConfigBuilder {
     adc: AdcProfile,
     robot_radius_mm: u16,
     sensor_offset_mm: Option<u16>,
+    set_back: bool,
     sensor_range_mm: u16,
     sensor_angles_deg: [i16; SENSOR_COUNT],
     xi_att: i32,
@@ -212,7 +234,7 @@ impl ConfigBuilder {
     /// | parameter | default | source |
     /// |---|---|---|
     /// | robot radius | 100 mm | ours (scenario format default) |
-    /// | sensor offset | = robot radius (sensors on the rim) | ours |
+    /// | sensor offset | = robot radius (sensors on the rim; [`ConfigBuilder::sensors_set_back`] sets them behind it) | ours |
     /// | sensor range | 800 mm | paper §4 |
     /// | sensor angles | −40, −20, 0, 20, 40° | paper §4 |
     /// | ξ_att | 2 | paper eq. 5 |
@@ -220,7 +242,7 @@ impl ConfigBuilder {
     /// | ξ (off-sensor) | 1 | paper eq. 14 |
     /// | goal tolerance | 50 mm | ours |
     /// | clearance | 40 mm | ours: lateral margin of the safety rule (§5) and of the collision corridor (eqs. 7, 8); 40 rather than 20 mm because a beam samples one point of an obstacle and a corner between the beams reaches past it (docs/bench.md) |
-    /// | stand-off | 100 mm | ours: obstacles ahead stay this far from the sensor faces (the sensor's minimum range, so never in fold-back) |
+    /// | stand-off | 100 mm | ours: obstacles ahead stay this far beyond the rim (with sensors on the rim, their minimum range: never in fold-back) |
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
     /// | DM tolerance | 5° from the target bearing | ours |
@@ -229,6 +251,7 @@ impl ConfigBuilder {
             adc,
             robot_radius_mm: 100,
             sensor_offset_mm: None,
+            set_back: false,
             sensor_range_mm: 800,
             sensor_angles_deg: [-40, -20, 0, 20, 40],
             xi_att: 2 * FORCE_ONE,
@@ -249,9 +272,33 @@ impl ConfigBuilder {
         self.robot_radius_mm = v;
         self
     }
-    /// Centre-to-sensor-face distance in mm (default: the robot radius).
+    /// Centre-to-sensor-face distance in mm (default: the robot radius,
+    /// or with [`ConfigBuilder::sensors_set_back`] the radius less the
+    /// sensors' minimum range).
     pub const fn sensor_offset_mm(mut self, v: u16) -> Self {
         self.sensor_offset_mm = Some(v);
+        self
+    }
+    /// The sensors mounted [`FOLD_BACK_MM`] (100 mm, their minimum range)
+    /// behind the rim, at least at the centre, unless
+    /// [`ConfigBuilder::sensor_offset_mm`] places them. Ours: a sensor on
+    /// the rim reads an obstacle within 100 mm of its face as farther
+    /// (fold-back), which is what the benches' last collisions were
+    /// (docs/bench.md, "Known failures"); set back, nothing outside the
+    /// body is ever that near a face. Whenever the faces are that far
+    /// behind the rim (whichever way the offset was set), the planner
+    /// follows the rules measured with them (docs/bench.md, "Sensors set
+    /// back"): the datasheet table interpolated in 1/d
+    /// ([`Calibration::from_points_reciprocal`]), what the view reads
+    /// within 100 mm of the rim kept as flank points, flank points kept
+    /// off with the clearance instead of 20 mm, and the boundary
+    /// follower's loop closed on passing its hit point more than 60° from
+    /// the way it left it (90° on the rim). The rules need planner-core's
+    /// `set-back` feature (a default one; the firmwares build without it
+    /// and hold none of their code): without it the sensors are placed
+    /// here all the same, and the rules of the rim apply.
+    pub const fn sensors_set_back(mut self) -> Self {
+        self.set_back = true;
         self
     }
     /// Sensor range in mm.
@@ -281,7 +328,7 @@ impl ConfigBuilder {
         self.clearance_mm = v;
         self
     }
-    /// Distance kept between obstacles ahead and the sensor faces, mm.
+    /// Distance kept between obstacles ahead and the rim, mm.
     pub const fn standoff_mm(mut self, v: u16) -> Self {
         self.standoff_mm = v;
         self
@@ -308,8 +355,11 @@ impl ConfigBuilder {
         }
         let offset = match self.sensor_offset_mm {
             Some(v) => v,
+            None if self.set_back => self.robot_radius_mm.saturating_sub(FOLD_BACK_MM),
             None => self.robot_radius_mm,
         };
+        let set_back = cfg!(feature = "set-back")
+            && offset as u32 + FOLD_BACK_MM as u32 <= self.robot_radius_mm as u32;
         if offset > 1_000 {
             return Err(ConfigError::SensorOffset);
         }
@@ -348,7 +398,12 @@ impl ConfigBuilder {
         // replaces one. (The builder holds no tables: on the AVR a builder,
         // a config and a planner with five tables each would not fit in RAM
         // at once.)
-        let c = match Calibration::gp2y0a21(self.adc) {
+        let c = if set_back {
+            Calibration::gp2y0a21_reciprocal(self.adc)
+        } else {
+            Calibration::gp2y0a21(self.adc)
+        };
+        let c = match c {
             Ok(c) => c,
             Err(e) => return Err(ConfigError::Calibration(0, e)),
         };
@@ -381,6 +436,7 @@ impl ConfigBuilder {
             direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),
             escape: self.escape,
             calibration: [c; SENSOR_COUNT],
+            set_back,
         })
     }
 }
@@ -443,6 +499,49 @@ mod tests {
         ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
             .clearance_mm(600)
             .build();
+
+    #[test]
+    #[cfg(feature = "set-back")]
+    fn set_back_sensors_sit_their_minimum_range_behind_the_rim() {
+        let set_back = |radius| {
+            b().robot_radius_mm(radius)
+                .sensors_set_back()
+                .build()
+                .unwrap()
+        };
+        let c = set_back(100);
+        assert_eq!(c.sensor_offset_mm(), 0, "a 100 mm rover: at the centre");
+        assert!(c.sensors_set_back());
+        assert_eq!(set_back(160).sensor_offset_mm(), 60);
+        // A smaller rover: at the centre, still within the minimum range of
+        // the rim, so not set back for the rules.
+        let small = set_back(50);
+        assert_eq!(small.sensor_offset_mm(), 0, "never in front of the centre");
+        assert!(!small.sensors_set_back());
+        // The default: on the rim.
+        let rim = b().build().unwrap();
+        assert_eq!(rim.sensor_offset_mm(), 100);
+        assert!(!rim.sensors_set_back());
+        // An offset placed by hand decides, whichever way it was set.
+        let placed = b()
+            .robot_radius_mm(160)
+            .sensor_offset_mm(40)
+            .build()
+            .unwrap();
+        assert!(placed.sensors_set_back());
+        let placed = b()
+            .robot_radius_mm(160)
+            .sensor_offset_mm(61)
+            .sensors_set_back();
+        assert!(!placed.build().unwrap().sensors_set_back());
+        // Set back, the table is the one interpolated in 1/d.
+        let adc = AdcProfile::AVR_10BIT_5V;
+        assert_eq!(
+            c.calibration[0],
+            Calibration::gp2y0a21_reciprocal(adc).unwrap()
+        );
+        assert_eq!(rim.calibration[0], Calibration::gp2y0a21(adc).unwrap());
+    }
 
     #[test]
     fn a_config_built_at_compile_time_is_the_one_built_at_run_time() {

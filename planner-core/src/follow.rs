@@ -51,7 +51,7 @@
 //! free), so following adds no way to collide.
 
 use crate::config::Config;
-use crate::fixed::{within, Angle, Point};
+use crate::fixed::{hypot, within, Angle, Point};
 use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// A heading is taken while seeking or following if its way is free this
@@ -220,17 +220,28 @@ impl Follow {
                 // dead end beside the hit point it comes back the way it
                 // went. So the loop closes only on coming back from the
                 // other side (the offset from the hit point on entering
-                // "back" against the one on leaving it); coming back the
-                // same way, the rover must go away again first.
+                // "back" more than 90° from the one on leaving it); coming
+                // back the same way, the rover must go away again first.
+                // With the sensors set back, more than 60°: a track that
+                // passes the hit point off to one side enters and leaves
+                // its radius on the same side of it (walled-in, seed 1: 82°
+                // apart, round the walls for 1,000 cycles without closing).
                 let (entered, (x, y)) = self.pass_hit(hit, robot, back);
                 if !self.away {
                     self.away = !within(hit, robot, back.saturating_mul(2));
                 } else if entered {
-                    // Every offset clamped below 2^14 (only the sign of
-                    // the dot product counts; the offsets are a few hundred
-                    // mm): the sum fits i32 (no 64-bit multiply on the AVR).
+                    // Every offset clamped below 2^14 (the offsets are a
+                    // few hundred mm): the dot product and the product of
+                    // the lengths fit i32 (no 64-bit multiply on the AVR).
                     let along = self.out.0 as i32 * x + self.out.1 as i32 * y;
-                    if along <= 0 {
+                    let apart = if cfg.set_back() {
+                        // cos 60° = 1/2.
+                        let out = hypot(self.out.0 as i32, self.out.1 as i32) as i32;
+                        2 * along <= out * hypot(x, y) as i32
+                    } else {
+                        along <= 0
+                    };
+                    if apart {
                         self.side = 0;
                         return FollowVerdict::Looped;
                     }
@@ -375,6 +386,8 @@ mod tests {
     use super::*;
 
     use crate::config::test_config as cfg;
+    use crate::config::ConfigBuilder;
+    use crate::sensors::AdcProfile;
 
     const CLEAR: Readings = [Reading::Clear; SENSOR_COUNT];
     /// Something 150 mm off the left beams' faces, nothing on the right.
@@ -542,6 +555,47 @@ mod tests {
         }
         let v = f.decide(&cfg, &WALL_LEFT, Point::new(-250, 0), 3_000, Angle::ZERO, 0);
         assert_eq!(v, FollowVerdict::Looped);
+    }
+
+    /// A track out of the hit point's radius towards −y, round, and back
+    /// into it 87° from the way out, both offsets on the hit point's −x
+    /// side (as a track that passes it some way off): the verdict on
+    /// coming back.
+    fn passing_off_to_one_side(cfg: &Config) -> FollowVerdict {
+        let mut f = Follow::default();
+        f.start();
+        assert_eq!(
+            f.decide(cfg, &WALL_LEFT, P0, 3_000, Angle::ZERO, 100),
+            FollowVerdict::Hug
+        );
+        let track = [
+            (-150, -200),
+            (-250, -300),
+            (-250, -2_000),
+            (-2_000, -2_000),
+            (-2_000, 0),
+        ];
+        for (x, y) in track {
+            let v = f.decide(cfg, &WALL_LEFT, Point::new(x, y), 3_000, Angle::ZERO, 0);
+            assert_eq!(v, FollowVerdict::Hug, "at ({x}, {y})");
+        }
+        // (-250, -300) left the radius; back at (-200, 150), 87° from it
+        // (their dot product positive).
+        let back = Point::new(-200, 150);
+        f.decide(cfg, &WALL_LEFT, back, 3_000, Angle::ZERO, 0)
+    }
+
+    #[test]
+    #[cfg(feature = "set-back")]
+    fn with_the_sensors_set_back_a_loop_closes_past_60_degrees() {
+        let set_back = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .sensors_set_back()
+            .build()
+            .unwrap();
+        assert!(set_back.sensors_set_back());
+        assert_eq!(passing_off_to_one_side(&set_back), FollowVerdict::Looped);
+        // On the rim, 90°: not yet.
+        assert_eq!(passing_off_to_one_side(&cfg()), FollowVerdict::Hug);
     }
 
     #[test]

@@ -353,6 +353,7 @@ impl Planner {
         // it, once, and let the guard trust it.
         if !moved && self.turned_in_place >= 4 * FULL_TURN {
             if let Some(out) = self.back_out(robot) {
+                self.see_near(pose);
                 return out;
             }
         }
@@ -370,6 +371,8 @@ impl Planner {
             self.follow.start();
         }
         if self.follow.active() {
+            self.see_near(pose);
+            let readings = &self.last_readings;
             self.follow.after_step(moved, stopped);
             let bearing_rel = bearing.sub(pose.heading);
             let in_sector = bearing_rel.abs_signed() <= self.config.sector_half_width().0;
@@ -421,6 +424,11 @@ impl Planner {
         for p in points.iter() {
             let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
             let at = robot.offset_dir(toward, p.distance_mm);
+            if cfg.set_back() {
+                let r = readings.get(p.sensor as usize).copied();
+                let r = r.unwrap_or(Reading::Clear);
+                self.flank.saw_point(cfg, r, p.distance_mm, at, robot);
+            }
             #[cfg(feature = "report")]
             let _ = self.last_points.push(at);
             if nearest.is_none_or(|(d, _)| p.distance_mm < d) {
@@ -692,6 +700,21 @@ impl Planner {
         // wall, and no heading was ever free: gen-223, seed 1).
         Planner::count_turn(&mut self.turned_in_place, moved, turn);
         self.command(pose.position, pose.heading.add(turn), step)
+    }
+
+    /// With the sensors set back, what the view from `pose` reads near the
+    /// rim is kept as flank points ([`command::Flank::saw_near`]). Out of
+    /// line: only the boundary follower and the wedge rule's way back call
+    /// it (the potential field keeps them in its loop over the collision
+    /// points).
+    #[inline(never)]
+    fn see_near(&mut self, pose: Pose) {
+        if self.config.set_back() {
+            let dir = Dir::of(pose.heading);
+            let readings = &self.last_readings;
+            self.flank
+                .saw_near(&self.config, pose.position, dir, readings);
+        }
     }
 
     /// The guard's flank points as the safety rule takes them at `pose`.

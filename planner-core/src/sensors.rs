@@ -44,6 +44,12 @@ pub const GP2Y0A21_MV_MM: [(u16, u16); 8] = [
     (420, 800),
 ];
 
+/// The GP2Y0A21YK0F's minimum range (mm, its first datasheet point): an
+/// object nearer its face reads as farther (fold-back). Sensors set this
+/// far behind the rim ([`crate::ConfigBuilder::sensors_set_back`]) never
+/// have anything outside the body there.
+pub const FOLD_BACK_MM: u16 = GP2Y0A21_MV_MM[0].1;
+
 /// An ADC's resolution and reference voltage.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -163,6 +169,30 @@ impl Calibration {
         adc: AdcProfile,
         points: &[(u16, u16)],
     ) -> Result<Self, CalibrationError> {
+        Calibration::build(adc, points, false)
+    }
+
+    /// [`Calibration::from_points`], interpolated linearly in 1/d between
+    /// the points instead of in d: the sensor's output is close to linear
+    /// in 1/d (ALGORITHMS.md §5: "falls roughly as 1/distance"), and on the
+    /// datasheet curve the straight line in d reads 17 mm too far at
+    /// 140 mm, between its 100 and 200 mm points. Beyond the end points the
+    /// end segments' straight lines, as there (1/d would bend to infinity
+    /// before the phantom level). The table of sensors set back
+    /// ([`crate::ConfigBuilder::sensors_set_back`]).
+    pub const fn from_points_reciprocal(
+        adc: AdcProfile,
+        points: &[(u16, u16)],
+    ) -> Result<Self, CalibrationError> {
+        Calibration::build(adc, points, true)
+    }
+
+    /// The table, interpolated in 1/d (`reciprocal`) or in d.
+    const fn build(
+        adc: AdcProfile,
+        points: &[(u16, u16)],
+        reciprocal: bool,
+    ) -> Result<Self, CalibrationError> {
         if adc.bits < 8 || adc.bits > 16 || adc.vref_mv == 0 {
             return Err(CalibrationError::BadAdc);
         }
@@ -214,13 +244,26 @@ impl Calibration {
             }
             let ((c0, d0), (c1, d1)) = (sorted[k - 1], sorted[k]);
             let (c0, d0, c1, d1) = (c0 as i32, d0 as i32, c1 as i32, d1 as i32);
-            let num = (c - c0) * (d1 - d0);
-            let den = c1 - c0; // > 0: strictly increasing counts
-            let d = d0
-                + match (2 * num + den).checked_div(2 * den) {
+            let d = if reciprocal && c >= c0 && c <= c1 {
+                // 1/d = 1/d0 + (c − c0)/(c1 − c0) · (1/d1 − 1/d0), rounded;
+                // in 64 bits (d0·d1·(c1 − c0) reaches 2^37). The
+                // denominator is at least d1·(c1 − c0) > 0 within the
+                // segment (strictly increasing counts, decreasing mm).
+                let (c, c0, d0, c1, d1) = (c as i64, c0 as i64, d0 as i64, c1 as i64, d1 as i64);
+                let num = d0 * d1 * (c1 - c0);
+                let den = d1 * (c1 - c0) + (c - c0) * (d0 - d1);
+                match (2 * num + den).checked_div(2 * den) {
+                    Some(q) => q as i32,
+                    None => 0,
+                }
+            } else {
+                let num = (c - c0) * (d1 - d0);
+                let den = c1 - c0; // > 0: strictly increasing counts
+                d0 + match (2 * num + den).checked_div(2 * den) {
                     Some(q) => q,
                     None => 0,
-                };
+                }
+            };
             mm[i] = if d < 0 {
                 0
             } else if d > 4_000 {
@@ -248,6 +291,16 @@ impl Calibration {
 
     /// The GP2Y0A21YK0F datasheet curve for an ADC (ALGORITHMS.md §5).
     pub const fn gp2y0a21(adc: AdcProfile) -> Result<Self, CalibrationError> {
+        Calibration::gp2y0a21_with(adc, false)
+    }
+
+    /// [`Calibration::gp2y0a21`] interpolated in 1/d
+    /// ([`Calibration::from_points_reciprocal`]).
+    pub const fn gp2y0a21_reciprocal(adc: AdcProfile) -> Result<Self, CalibrationError> {
+        Calibration::gp2y0a21_with(adc, true)
+    }
+
+    const fn gp2y0a21_with(adc: AdcProfile, reciprocal: bool) -> Result<Self, CalibrationError> {
         let mut pts = [(0u16, 0u16); GP2Y0A21_MV_MM.len()];
         let mut i = 0;
         while i < pts.len() {
@@ -255,7 +308,7 @@ impl Calibration {
             pts[i] = (adc.counts_for_mv(mv), mm);
             i += 1;
         }
-        Calibration::from_points(adc, &pts)
+        Calibration::build(adc, &pts, reciprocal)
     }
 
     /// Classify one raw count.
@@ -591,6 +644,32 @@ mod tests {
                 let err = (got as i32 - mm as i32).abs();
                 // Resampling onto 32 bins costs at most this much here.
                 assert!(err <= 25, "{adc:?} {mv} mV: {got} mm vs {mm} mm");
+            }
+        }
+    }
+
+    #[test]
+    fn the_reciprocal_table_reads_between_the_points_as_1_over_d() {
+        for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
+            let inv = Calibration::gp2y0a21_reciprocal(adc).unwrap();
+            let lin = Calibration::gp2y0a21(adc).unwrap();
+            let mm = |cal: &Calibration, mv| cal.reading(adc.counts_for_mv(mv)).range_mm().unwrap();
+            // Halfway in volts between the 100 and 200 mm points: 1/d
+            // halfway, 133 mm; the straight line in d says 150 mm.
+            let (got, straight) = (mm(&inv, 1_995), mm(&lin, 1_995));
+            assert!(got.abs_diff(133) <= 6, "{adc:?}: {got} mm");
+            assert!(straight.abs_diff(150) <= 6, "{adc:?}: {straight} mm");
+            // The datasheet points themselves, within the resampling error.
+            for &(mv, want) in GP2Y0A21_MV_MM.iter() {
+                assert!(mm(&inv, mv).abs_diff(want) <= 25, "{adc:?} {mv} mV");
+            }
+            // 1/d between two points lies below their chord in d: never
+            // farther than the linear table (but for rounding).
+            let (far, near) = inv.window();
+            for raw in far..=near {
+                let (a, b) = (inv.reading(raw), lin.reading(raw));
+                let (a, b) = (a.range_mm().unwrap(), b.range_mm().unwrap());
+                assert!(a <= b + 1, "{adc:?} count {raw}: {a} > {b}");
             }
         }
     }

@@ -41,6 +41,10 @@ enum Cmd {
         /// Noise-free, instant sensors without fold-back.
         #[arg(long)]
         perfect: bool,
+        /// The sensors set back from the rim by their minimum range (100
+        /// mm), at least at the centre; on the rim otherwise.
+        #[arg(long)]
+        set_back: bool,
     },
     /// Every scenario under the given files or folders, in parallel.
     Bench {
@@ -76,6 +80,9 @@ enum Cmd {
         /// Noise-free sensors.
         #[arg(long)]
         perfect: bool,
+        /// The sensors set back from the rim by their minimum range.
+        #[arg(long)]
+        set_back: bool,
     },
     /// Write a random world in the paper's environment 2 arena: circles
     /// with its parameters, or turned boxes and walls (`--kind`).
@@ -141,21 +148,28 @@ fn real_main(cli: Cli) -> Result<(), String> {
             svg: svg_out,
             trace,
             perfect,
+            set_back,
         } => {
             let sc = Scenario::load(&file).map_err(|e| e.to_string())?;
             let cfg = SimConfig {
                 planner,
                 seed,
                 sensors: sensors(perfect),
+                set_back,
                 ..SimConfig::default()
             };
             let refp = reference::shortest_path(&sc);
             let res = sim::run(&sc, &cfg, refp.as_ref().map(|r| r.length));
             let mut report = format!(
-                "scenario     {}\nplanner      {}\noutcome      {}\nsteps        {}\n\
-                 path_length  {:.3} m\n",
+                "scenario     {}\nplanner      {}\n",
                 sc.name,
-                planner.name(),
+                planner.name()
+            );
+            if set_back {
+                report += "sensors      set back from the rim by their minimum range\n";
+            }
+            report += &format!(
+                "outcome      {}\nsteps        {}\npath_length  {:.3} m\n",
                 res.outcome.as_str(),
                 res.steps,
                 res.path_length
@@ -215,6 +229,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             svg: pictures,
             summary,
             perfect,
+            set_back,
         } => {
             // Workers with the main thread's stack (8 MiB) rather than
             // 2 MiB: the `route` planner's map (311,312 bytes with
@@ -252,6 +267,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                         planner: *planner,
                         seed,
                         sensors: sensors(perfect),
+                        set_back,
                         ..SimConfig::default()
                     };
                     let mut these = match &pictures {

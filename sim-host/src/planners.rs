@@ -119,13 +119,20 @@ pub struct SimPlanner {
 }
 
 impl SimPlanner {
-    /// The planner `kind` for scenario `sc`, sensors on an `adc`.
-    pub fn new(kind: PlannerKind, sc: &Scenario, adc: AdcProfile) -> SimPlanner {
+    /// The planner `kind` for scenario `sc`, sensors on an `adc`, on the
+    /// rim or `set_back` behind it.
+    pub fn new(kind: PlannerKind, sc: &Scenario, adc: AdcProfile, set_back: bool) -> SimPlanner {
         let escape = escape_config(kind);
         let radius_mm = (sc.robot_radius * 1000.0).round().clamp(20.0, 1000.0) as u16;
-        let cfg = ConfigBuilder::new(adc)
+        let builder = ConfigBuilder::new(adc)
             .robot_radius_mm(radius_mm)
-            .escape(escape)
+            .escape(escape);
+        let builder = if set_back {
+            builder.sensors_set_back()
+        } else {
+            builder
+        };
+        let cfg = builder
             .build()
             .expect("the default configuration with a validated scenario radius is valid");
         let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
@@ -312,9 +319,11 @@ mod tests {
             sc.robot_radius = mm as f64 / 1000.0;
             for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
                 for kind in [PlannerKind::Eapf, PlannerKind::EapfPlain, PlannerKind::Apf] {
-                    let p = SimPlanner::new(kind, &sc, adc);
-                    let want = mm.clamp(20, 1_000) as u16;
-                    assert_eq!(p.config().robot_radius_mm(), want, "{mm} mm");
+                    for set_back in [false, true] {
+                        let p = SimPlanner::new(kind, &sc, adc, set_back);
+                        let want = mm.clamp(20, 1_000) as u16;
+                        assert_eq!(p.config().robot_radius_mm(), want, "{mm} mm");
+                    }
                 }
             }
         }

@@ -53,6 +53,10 @@ pub struct SimConfig {
     pub sensors: SensorMode,
     /// ADC of the emulated board.
     pub adc: AdcProfile,
+    /// The sensors set back from the rim by their minimum range
+    /// (`planner_core::ConfigBuilder::sensors_set_back`); on the rim
+    /// otherwise.
+    pub set_back: bool,
     /// Forward speed, m/s.
     pub speed: f64,
     /// Turn rate, rad/s.
@@ -74,6 +78,7 @@ impl Default for SimConfig {
             seed: 1,
             sensors: SensorMode::REALISTIC,
             adc: AdcProfile::AVR_10BIT_5V,
+            set_back: false,
             speed: 0.25,
             turn_rate: 2.0,
             slip: None,
@@ -214,7 +219,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     let world = World::from_scenario(sc);
     let r = sc.robot_radius;
     let goal = V2::new(sc.goal[0], sc.goal[1]);
-    let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc);
+    let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc, cfg.set_back);
     let angles = planner.sensor_angles_rad();
     let mut sensors = VirtualSensors::new(
         cfg.adc,
