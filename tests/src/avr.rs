@@ -11,30 +11,45 @@ use std::sync::Mutex;
 /// CPU clock of the board, Hz.
 pub const F_CPU: u32 = 16_000_000;
 
-static BUILT: Mutex<Vec<(&'static str, PathBuf)>> = Mutex::new(Vec::new());
+static BUILT: Mutex<Vec<(String, PathBuf)>> = Mutex::new(Vec::new());
 
-/// Build one binary of firmware-avr (release) once per process.
+/// Build one binary of firmware-avr (release) with `features` once per
+/// process. With the `set-back` feature in its own target folder, so that
+/// the two builds of one binary do not overwrite each other's ELF.
 fn build(bin: &'static str, features: &[&str]) -> PathBuf {
+    let key = format!("{bin} {}", features.join(","));
     let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
-    if let Some((_, p)) = built.iter().find(|(b, _)| *b == bin) {
+    if let Some((_, p)) = built.iter().find(|(k, _)| *k == key) {
         return p.clone();
     }
     let dir = repo_root().join("firmware-avr");
+    let target = if features.contains(&"set-back") {
+        "target/set-back"
+    } else {
+        "target"
+    };
     let mut cmd = clean_cargo(&dir);
     cmd.args(["build", "--release", "--quiet", "--bin", bin]);
+    cmd.args(["--target-dir", target]);
     if !features.is_empty() {
         cmd.args(["--features", &features.join(",")]);
     }
     let status = cmd.status().expect("run cargo for firmware-avr");
     assert!(status.success(), "firmware-avr build of {bin} failed");
-    let elf = dir.join(format!("target/avr-none/release/{bin}.elf"));
-    built.push((bin, elf.clone()));
+    let elf = dir.join(format!("{target}/avr-none/release/{bin}.elf"));
+    built.push((key, elf.clone()));
     elf
 }
 
 /// The firmware (release build); the ELF path.
 pub fn firmware_elf() -> PathBuf {
     build("firmware-avr", &[])
+}
+
+/// The firmware built for sensors set back from the rim (its `set-back`
+/// feature).
+pub fn set_back_firmware_elf() -> PathBuf {
+    build("firmware-avr", &["set-back"])
 }
 
 /// The `costs` bench: the step's parts timed on fixed inputs.

@@ -126,8 +126,26 @@ pub fn run_guards(planner: &mut Planner, guards: &[GuardSample]) -> u8 {
 /// dead end's trace to steps that cost the STM32 up to 3,149 instructions,
 /// over issue 6's 3,000: `docs/avr-cycles.md`.)
 pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace {
+    record_with(sc, adc, steps, seed, false)
+}
+
+/// [`record`] with the sensors on the rim, or `set_back` behind it
+/// (`ConfigBuilder::sensors_set_back`, the firmwares' `set-back` feature).
+pub fn record_with(
+    sc: &Scenario,
+    adc: AdcProfile,
+    steps: usize,
+    seed: u64,
+    set_back: bool,
+) -> Trace {
     let world = World::from_scenario(sc);
-    let cfg = ConfigBuilder::new(adc).build().expect("default config");
+    let builder = ConfigBuilder::new(adc);
+    let builder = if set_back {
+        builder.sensors_set_back()
+    } else {
+        builder
+    };
+    let cfg = builder.build().expect("default config");
     let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
     let angles = cfg.sensor_angles().map(to_rad);
     let offset = cfg.sensor_offset_mm() as f64 / 1000.0;
@@ -209,6 +227,11 @@ impl Frame {
 /// where the escape drops virtual obstacles, whose forces
 /// make the most expensive steps.
 pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
+    standard_traces_with(adc, false)
+}
+
+/// [`standard_traces`] with the sensors on the rim, or `set_back` behind it.
+pub fn standard_traces_with(adc: AdcProfile, set_back: bool) -> Vec<Trace> {
     [
         ("traps/u-trap.toml", 120),
         ("paper/env1-ex1.toml", 120),
@@ -218,7 +241,7 @@ pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
     ]
     .iter()
     .enumerate()
-    .map(|(i, &(rel, steps))| record(&scenario(rel), adc, steps, 7 + i as u64))
+    .map(|(i, &(rel, steps))| record_with(&scenario(rel), adc, steps, 7 + i as u64, set_back))
     .collect()
 }
 

@@ -72,7 +72,19 @@ pub struct QemuRun {
 
 /// The `qemu` build's ELF (as [`run_traces`] last built it).
 pub fn qemu_elf() -> PathBuf {
-    repo_root().join("firmware-stm32/target/qemu/thumbv7em-none-eabihf/release/firmware-stm32")
+    qemu_elf_in(QEMU_TARGET)
+}
+
+/// Where the `qemu` build goes: the sensors on the rim, and set back.
+const QEMU_TARGET: &str = "target/qemu";
+const QEMU_SET_BACK_TARGET: &str = "target/qemu-set-back";
+
+fn qemu_elf_in(target_dir: &str) -> PathBuf {
+    let elf = "thumbv7em-none-eabihf/release/firmware-stm32";
+    repo_root()
+        .join("firmware-stm32")
+        .join(target_dir)
+        .join(elf)
 }
 
 /// QEMU for the netduinoplus2 running `elf`, instructions counted
@@ -112,8 +124,20 @@ impl QemuRun {
 
 /// Build the `qemu` firmware with `traces` compiled in and run it.
 pub fn run_traces(traces: &[Trace]) -> QemuRun {
+    run_traces_with(traces, false)
+}
+
+/// [`run_traces`] for the firmware built with the sensors on the rim, or
+/// `set_back` behind it (its `set-back` feature; in its own target folder,
+/// so that the two builds do not undo each other).
+pub fn run_traces_with(traces: &[Trace], set_back: bool) -> QemuRun {
+    let (features, target_dir) = if set_back {
+        ("qemu,set-back", QEMU_SET_BACK_TARGET)
+    } else {
+        ("qemu", QEMU_TARGET)
+    };
     let dir = repo_root().join("firmware-stm32");
-    let trace_path = dir.join("target/qemu-trace.bin");
+    let trace_path = dir.join(format!("{target_dir}-trace.bin"));
     std::fs::create_dir_all(dir.join("target")).expect("target dir");
     std::fs::write(&trace_path, encode(traces)).expect("write trace");
     let ok = clean_cargo(&dir)
@@ -123,16 +147,16 @@ pub fn run_traces(traces: &[Trace]) -> QemuRun {
             "--quiet",
             "--no-default-features",
             "--features",
-            "qemu",
+            features,
             "--target-dir",
-            "target/qemu",
+            target_dir,
         ])
         .env("ROVER_TRACE", &trace_path)
         .status()
         .expect("cargo for firmware-stm32")
         .success();
     assert!(ok, "firmware-stm32 qemu build failed");
-    let elf = qemu_elf();
+    let elf = qemu_elf_in(target_dir);
     let qemu = qemu_command(&elf)
         .stdin(Stdio::null())
         .output()
