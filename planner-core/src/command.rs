@@ -226,6 +226,7 @@ const FLANK_LATERAL_MM: i32 = 170;
 
 /// With the sensors set back, a beam's point within this of the rim (mm) in
 /// the planner's own view is a flank point too (see [`Flank::saw_near`]).
+#[cfg(feature = "set-back")]
 const FLANK_NEAR_MM: u16 = 100;
 
 /// A flank point within this (mm, either axis) of a kept one replaces it:
@@ -333,6 +334,7 @@ impl Flank {
     /// ranged readings: "too close" has no position. The potential
     /// field's step keeps them in its own loop over the collision points,
     /// which places them anyway ([`Flank::saw_point`]).
+    #[cfg(feature = "set-back")]
     pub(crate) fn saw_near(
         &mut self,
         cfg: &Config,
@@ -353,6 +355,7 @@ impl Flank {
 
     /// One beam's point `at`, `distance_mm` from the centre `robot`, read
     /// as `r`: kept as [`Flank::saw_near`] keeps it.
+    #[cfg(feature = "set-back")]
     pub(crate) fn saw_point(
         &mut self,
         cfg: &Config,
@@ -391,6 +394,7 @@ impl Flank {
 
 /// Whether a reading `r`, `distance_mm` from the centre, is a ranged one
 /// within [`FLANK_NEAR_MM`] of the rim (see [`Flank::saw_near`]).
+#[cfg(feature = "set-back")]
 fn is_near(cfg: &Config, r: Reading, distance_mm: u16) -> bool {
     matches!(r, Reading::Range(_)) && distance_mm <= cfg.robot_radius_mm + FLANK_NEAR_MM
 }

@@ -73,9 +73,11 @@ pub struct Config {
     pub(crate) direct_tolerance: Angle,
     pub(crate) escape: crate::escape::EscapeConfig,
     pub(crate) calibration: [Calibration; SENSOR_COUNT],
-    /// The sensor faces are at least the sensors' minimum range
-    /// ([`FOLD_BACK_MM`]) behind the rim: see
-    /// [`ConfigBuilder::sensors_set_back`] for the rules this turns on.
+    /// The sensor faces sit at least their minimum range behind the rim
+    /// ([`ConfigBuilder::sensors_set_back`]). Only with the `set-back`
+    /// feature: the firmwares' configuration, built without it, keeps the
+    /// layout their step was measured with.
+    #[cfg(feature = "set-back")]
     pub(crate) set_back: bool,
 }
 
@@ -118,6 +120,7 @@ impl Config {
             follow: false,
         },
         calibration: [Calibration::UNSET; SENSOR_COUNT],
+        #[cfg(feature = "set-back")]
         set_back: false,
     };
 
@@ -130,11 +133,13 @@ impl Config {
     }
 
     /// [`Config::sensors_set_back`] for the planner's rules: without the
-    /// `set-back` feature a constant `false`, so that the firmwares, built
-    /// without it, hold none of their code.
+    /// `set-back` feature a constant `false`.
     #[inline(always)]
     pub(crate) fn set_back(&self) -> bool {
-        cfg!(feature = "set-back") && self.set_back
+        #[cfg(feature = "set-back")]
+        return self.set_back;
+        #[cfg(not(feature = "set-back"))]
+        false
     }
 
     /// Robot radius, mm.
@@ -358,8 +363,7 @@ impl ConfigBuilder {
             None if self.set_back => self.robot_radius_mm.saturating_sub(FOLD_BACK_MM),
             None => self.robot_radius_mm,
         };
-        let set_back = cfg!(feature = "set-back")
-            && offset as u32 + FOLD_BACK_MM as u32 <= self.robot_radius_mm as u32;
+        let set_back = cfg!(feature = "set-back") && is_set_back(offset, self.robot_radius_mm);
         if offset > 1_000 {
             return Err(ConfigError::SensorOffset);
         }
@@ -436,9 +440,16 @@ impl ConfigBuilder {
             direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),
             escape: self.escape,
             calibration: [c; SENSOR_COUNT],
+            #[cfg(feature = "set-back")]
             set_back,
         })
     }
+}
+
+/// Whether sensor faces `offset_mm` from the centre of a rover of
+/// `radius_mm` sit at least their minimum range behind its rim.
+const fn is_set_back(offset_mm: u16, radius_mm: u16) -> bool {
+    offset_mm as u32 + FOLD_BACK_MM as u32 <= radius_mm as u32
 }
 
 /// `lo ≤ v ≤ hi` (`RangeInclusive::contains` is not a `const fn`).

@@ -353,6 +353,7 @@ impl Planner {
         // it, once, and let the guard trust it.
         if !moved && self.turned_in_place >= 4 * FULL_TURN {
             if let Some(out) = self.back_out(robot) {
+                #[cfg(feature = "set-back")]
                 self.see_near(pose);
                 return out;
             }
@@ -371,7 +372,9 @@ impl Planner {
             self.follow.start();
         }
         if self.follow.active() {
+            #[cfg(feature = "set-back")]
             self.see_near(pose);
+            #[cfg(feature = "set-back")]
             let readings = &self.last_readings;
             self.follow.after_step(moved, stopped);
             let bearing_rel = bearing.sub(pose.heading);
@@ -424,6 +427,7 @@ impl Planner {
         for p in points.iter() {
             let toward = forces::sensor_direction(cfg, heading_dir, p.sensor as usize);
             let at = robot.offset_dir(toward, p.distance_mm);
+            #[cfg(feature = "set-back")]
             if cfg.set_back() {
                 let r = readings.get(p.sensor as usize).copied();
                 let r = r.unwrap_or(Reading::Clear);
@@ -707,6 +711,7 @@ impl Planner {
     /// line: only the boundary follower and the wedge rule's way back call
     /// it (the potential field keeps them in its loop over the collision
     /// points).
+    #[cfg(feature = "set-back")]
     #[inline(never)]
     fn see_near(&mut self, pose: Pose) {
         if self.config.set_back() {
