@@ -42,6 +42,12 @@
 //! Crates: `heapless` for the bounded buffers (fixed capacity, no allocator);
 //! `embedded-hal` 0.2 (feature `hal02`) for the ADC adapter, because 1.0 has
 //! no ADC trait; `defmt` (feature `defmt`) for logging the types on target.
+//!
+//! Sensors mounted on the rim (the default) read an obstacle within their
+//! 100 mm minimum range as farther; [`ConfigBuilder::sensors_set_back`]
+//! mounts them that far behind it, with the planner's rules for them
+//! (feature `set-back`, on by default; the firmwares build without it
+//! unless asked).
 #![cfg_attr(not(test), no_std)]
 #![forbid(unsafe_code)]
 #![warn(missing_docs)]

@@ -400,3 +400,22 @@ fn a_tall_world_draws_its_legend_inside_the_picture() {
     }
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `--set-back` mounts the sensors behind the rim: `run` says so, and the
+/// rover drives another way than with them on the rim (the option reaches
+/// the planner and the virtual sensors): in the U-trap, the paths' lengths
+/// differ.
+#[test]
+fn set_back_sensors_are_said_and_drive_another_way() {
+    let u_trap = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/traps/u-trap.toml");
+    let rim = sim_host(&["run"], &[&u_trap]);
+    let back = sim_host(&["run", "--set-back"], &[&u_trap]);
+    let said = "sensors      set back from the rim by their minimum range";
+    assert!(back.contains(said), "{back}");
+    assert!(!rim.contains(said), "{rim}");
+    let length = |text: &str| {
+        let line = text.lines().find(|l| l.starts_with("path_length"));
+        line.unwrap_or_default().to_string()
+    };
+    assert_ne!(length(&rim), length(&back), "the same path:\n{rim}\n{back}");
+}
