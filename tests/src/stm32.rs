@@ -72,7 +72,23 @@ pub struct QemuRun {
 
 /// The `qemu` build's ELF (as [`run_traces`] last built it).
 pub fn qemu_elf() -> PathBuf {
-    qemu_elf_in(QEMU_TARGET)
+    qemu_elf_with(false)
+}
+
+/// The `qemu` build's ELF with the sensors on the rim, or `set_back` (as
+/// [`run_traces_with`] last built it).
+pub fn qemu_elf_with(set_back: bool) -> PathBuf {
+    qemu_elf_in(qemu_build(set_back).1)
+}
+
+/// The `qemu` build's features and target folder: the sensors on the rim,
+/// or `set_back`.
+fn qemu_build(set_back: bool) -> (&'static str, &'static str) {
+    if set_back {
+        ("qemu,set-back", QEMU_SET_BACK_TARGET)
+    } else {
+        ("qemu", QEMU_TARGET)
+    }
 }
 
 /// Where the `qemu` build goes: the sensors on the rim, and set back.
@@ -131,11 +147,7 @@ pub fn run_traces(traces: &[Trace]) -> QemuRun {
 /// `set_back` behind it (its `set-back` feature; in its own target folder,
 /// so that the two builds do not undo each other).
 pub fn run_traces_with(traces: &[Trace], set_back: bool) -> QemuRun {
-    let (features, target_dir) = if set_back {
-        ("qemu,set-back", QEMU_SET_BACK_TARGET)
-    } else {
-        ("qemu", QEMU_TARGET)
-    };
+    let (features, target_dir) = qemu_build(set_back);
     let dir = repo_root().join("firmware-stm32");
     let trace_path = dir.join(format!("{target_dir}-trace.bin"));
     std::fs::create_dir_all(dir.join("target")).expect("target dir");

@@ -13,7 +13,7 @@
 //! written in, and by the function the step's code called it under
 //! (`addr2line`'s inlined frames), not only by the symbol it lands in.
 
-use crate::stm32::{instructions, qemu_command, qemu_elf, run_traces};
+use crate::stm32::{instructions, qemu_command, qemu_elf_with, run_traces_with};
 use crate::{sorted, Trace};
 use addr2line::Loader;
 use std::collections::HashMap;
@@ -104,9 +104,15 @@ impl Names {
 /// and replayed once to read the firmware's own counts, then once more
 /// with QEMU's instruction log).
 pub fn profile(traces: &[Trace]) -> Profile {
-    let run = run_traces(traces);
+    profile_with(traces, false)
+}
+
+/// [`profile`] of the firmware built with the sensors on the rim, or
+/// `set_back` behind it (its `set-back` feature; `traces` recorded alike).
+pub fn profile_with(traces: &[Trace], set_back: bool) -> Profile {
+    let run = run_traces_with(traces, set_back);
     let mismatches = run.mismatches(traces);
-    let elf = qemu_elf();
+    let elf = qemu_elf_with(set_back);
     let log = elf.with_file_name("qemu-exec.log");
     // One instruction per translation block: `-singlestep` up to QEMU 8,
     // `one-insn-per-tb` from 8.1 on (where `-singlestep` went away).

@@ -254,23 +254,23 @@ fn ci() {
 }
 
 /// Firmware figures, measured now: `avr-report` (simavr) or `stm32-report`
-/// (QEMU), binaries of the tests crate.
+/// (QEMU), binaries of the tests crate, given the arguments after the task's
+/// name.
 fn report(bin: &str) {
-    run(
-        &root(),
-        "cargo",
-        &[
-            "+stable",
-            "run",
-            "--quiet",
-            "--release",
-            "-p",
-            "rover-tests",
-            "--bin",
-            bin,
-        ],
-        &[],
-    );
+    let mut args = vec![
+        "+stable",
+        "run",
+        "--quiet",
+        "--release",
+        "-p",
+        "rover-tests",
+        "--bin",
+        bin,
+        "--",
+    ];
+    let extra: Vec<String> = std::env::args().skip(2).collect();
+    args.extend(extra.iter().map(String::as_str));
+    run(&root(), "cargo", &args, &[]);
 }
 
 fn main() {
@@ -293,7 +293,7 @@ fn main() {
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
-            eprintln!("  stm32-profile where firmware-stm32's step spends its instructions (QEMU)");
+            eprintln!("  stm32-profile where firmware-stm32's step spends its instructions (QEMU; --set-back: the build for sensors set back)");
             exit(2);
         }
     }

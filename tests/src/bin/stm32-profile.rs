@@ -1,16 +1,29 @@
 //! `cargo xtask stm32-profile`: where the STM32 firmware's planner step
 //! spends its instructions, over the standard traces (those of `cargo
-//! xtask stm32-report`); see [`rover_tests::stm32_profile`].
+//! xtask stm32-report`); see [`rover_tests::stm32_profile`]. With
+//! `--set-back`, the firmware built for sensors set back from the rim, over
+//! traces recorded with them.
 
 use planner_core::AdcProfile;
-use rover_tests::stm32_profile::profile;
+use rover_tests::stm32_profile::profile_with;
 use rover_tests::{
-    at_new_position, mean_worst, print_by_bounds, print_by_position, print_table, standard_traces,
+    at_new_position, mean_worst, print_by_bounds, print_by_position, print_table,
+    standard_traces_with,
 };
 
 fn main() {
-    let traces = standard_traces(AdcProfile::STM32_12BIT_3V3);
-    let p = profile(&traces);
+    let set_back = match std::env::args().nth(1).as_deref() {
+        None => false,
+        Some("--set-back") => true,
+        Some(other) => {
+            eprintln!(
+                "stm32-profile: unknown argument {other} (usage: stm32-profile [--set-back])"
+            );
+            std::process::exit(2);
+        }
+    };
+    let traces = standard_traces_with(AdcProfile::STM32_12BIT_3V3, set_back);
+    let p = profile_with(&traces, set_back);
     let steps = p.counted.len() as u64;
     let total: u64 = p.by_callee.iter().map(|(_, n)| n).sum();
     let (mean, worst) = mean_worst(&p.counted);
