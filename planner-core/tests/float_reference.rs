@@ -92,7 +92,40 @@ fn cycle() -> impl Strategy<Value = ((i16, i16, u16), [u16; 5])> {
 
 #[test]
 fn fixed_point_matches_the_float_reference() {
-    let c = cfg();
+    let st = compare_all(&cfg());
+    print_and_check("float reference", &st);
+}
+
+/// The same with the sensors set back from the rim
+/// (`ConfigBuilder::sensors_set_back`): their offset, the stand-off from the
+/// rim, the table interpolated in 1/d (the reference reads the same bins),
+/// and the view's points near the rim kept as flank points and kept off.
+#[test]
+fn with_the_sensors_set_back_fixed_point_matches_the_float_reference() {
+    let c = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+        .sensors_set_back()
+        .escape(EscapeConfig {
+            enabled: false,
+            ..EscapeConfig::default()
+        })
+        .build()
+        .unwrap();
+    assert!(c.sensors_set_back());
+    let st = compare_all(&c);
+    print_and_check("float reference, sensors set back", &st);
+}
+
+fn print_and_check(what: &str, st: &Stats) {
+    println!(
+        "{what}: {} cycles compared, {} sequences cut at a decision boundary; worst heading error {:.4}°, worst step error {:.2} mm (bounds {HEADING_BOUND_DEG}°, {STEP_BOUND_MM} mm)",
+        st.compared, st.skipped, st.worst_heading_deg, st.worst_step_mm
+    );
+    assert!(st.compared > 10_000, "too few comparisons: {}", st.compared);
+}
+
+/// Random single cycles and six-cycle drives, each compared (see
+/// [`compare`]).
+fn compare_all(c: &Config) -> Stats {
     let mut st = Stats::default();
     // Deterministic: CI and a developer's machine draw the same cases.
     let mut runner = proptest::test_runner::TestRunner::deterministic();
@@ -101,10 +134,10 @@ fn fixed_point_matches_the_float_reference() {
         (0i16..10_000, 0i16..10_000),
         prop::collection::vec(cycle(), 1..2),
     );
-    for _ in 0..20_000 {
+    for _ in 0..60_000 {
         let tree = strategy.new_tree(&mut runner).unwrap();
         let (goal, cycles) = tree.current();
-        compare(&c, goal, &cycles, &mut st);
+        compare(c, goal, &cycles, &mut st);
     }
     // ...and six-cycle drives (small moves, a nearby goal), so that the
     // memory, the midpoint and off-sensor forces and the near-target rule
@@ -133,11 +166,7 @@ fn fixed_point_matches_the_float_reference() {
             y += rnd(300) as i16;
             h = h.wrapping_add(rnd(8_000) as u16).wrapping_sub(4_000);
         }
-        compare(&c, goal, &cycles, &mut st);
+        compare(c, goal, &cycles, &mut st);
     }
-    println!(
-        "float reference: {} cycles compared, {} sequences cut at a decision boundary; worst heading error {:.4}°, worst step error {:.2} mm (bounds {HEADING_BOUND_DEG}°, {STEP_BOUND_MM} mm)",
-        st.compared, st.skipped, st.worst_heading_deg, st.worst_step_mm
-    );
-    assert!(st.compared > 10_000, "too few comparisons: {}", st.compared);
+    st
 }

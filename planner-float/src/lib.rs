@@ -13,7 +13,10 @@
 //!   `f32-step` bench.
 //!
 //! It covers the EAPF step (sensors, collision points, memory, forces,
-//! motion classes, heading, step and the safety rule), not the escape.
+//! motion classes, heading, step and the safety rule), not the escape, with
+//! the sensors on the rim or set back from it (the configuration's offset,
+//! and with them set back the view's points near the rim kept and kept off,
+//! as planner-core's `ConfigBuilder::sensors_set_back` does).
 //!
 //! Crates: `num-traits` (with `libm`) for one `Float` bound over both widths
 //! without `std`; `heapless` for the bounded memory.
@@ -41,14 +44,23 @@ pub enum R<F> {
 
 /// Robot radius, mm (planner-core's default configuration).
 pub const RADIUS: f64 = 100.0;
-/// Sensor face offset from the centre, mm.
+/// Sensor face offset from the centre, mm, of the default configuration
+/// (the sensors on the rim); [`FloatPlanner::step`] takes the
+/// configuration's.
 pub const OFFSET: f64 = 100.0;
 /// Sensor range, mm.
 pub const RANGE: f64 = 800.0;
 /// Clearance added to the radius, mm.
 pub const CLEARANCE: f64 = 40.0;
-/// Stand-off kept in front of the sensor faces, mm.
+/// Stand-off kept ahead of the rim, mm.
 pub const STANDOFF: f64 = 100.0;
+/// With the sensors set back, a view's point within this of the rim is kept
+/// as a flank point, mm.
+pub const NEAR: f64 = 100.0;
+/// Flank points kept.
+pub const FLANK_POINTS: usize = 4;
+/// A flank point within this (either axis) of a kept one replaces it, mm.
+pub const FLANK_MERGE: f64 = 40.0;
 /// Goal tolerance, mm.
 pub const TOL_GOAL: f64 = 50.0;
 /// Shortest step, mm.
@@ -113,6 +125,9 @@ pub struct FloatPlanner<F, M = Libm> {
     spun: bool,
     paper_step: F,
     last_mm: [F; SENSOR_COUNT],
+    /// With the sensors set back: the points the view read within [`NEAR`]
+    /// of the rim (world mm), as the fixed planner's flank keeps them.
+    flank: heapless::Vec<(F, F), FLANK_POINTS>,
     track: bool,
     /// Smallest distance of any discrete decision from its threshold since
     /// it was last reset (only when built with `tracking`).
@@ -132,6 +147,7 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
             spun: false,
             paper_step: c(RANGE),
             last_mm: [F::zero(); SENSOR_COUNT],
+            flank: heapless::Vec::new(),
             track: tracking,
             margin: F::infinity(),
         }
@@ -164,9 +180,7 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         }
         let w = 1u32 << cal.shift();
         let k = (raw as u32 / w) as usize;
-        // Integers convert straight to F (no f64 on the way: the f32 build
-        // must not pull in double-precision routines).
-        let int = |v: u32| F::from(v).unwrap_or_else(F::zero);
+        let int = int_f::<F>;
         let f: F = int(raw as u32 % w) / int(w);
         let mut bins = cal.bins().skip(k);
         let d0 = bins.next().map_or(0, |b| b.1 as u32);
@@ -215,7 +229,12 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         let bearing = M::atan2(gy, gx);
         self.near(gd, c(RANGE));
         let near = gd < c(RANGE);
-        let (radius, offset) = (c::<F>(RADIUS), c::<F>(OFFSET));
+        let radius = c::<F>(RADIUS);
+        let offset = int_f::<F>(cfg.sensor_offset_mm() as u32);
+        let set_back = cfg.sensors_set_back();
+        if set_back {
+            self.saw_near(x, y, h, &rd, offset);
+        }
         let rs = radius + c(CLEARANCE);
         // Collision points (eqs. 7, 8).
         let mut pts: heapless::Vec<(usize, F), 5> = heapless::Vec::new();
@@ -406,8 +425,13 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         let mut step = if rel.abs() > half {
             F::zero()
         } else {
-            let (free, margin) = free_margin::<F, M>(&rd, rel);
+            let (free, margin) = free_margin::<F, M>(&rd, rel, offset);
             self.near(margin, F::zero());
+            let free = if set_back {
+                self.flank_free(x, y, h + rel, free)
+            } else {
+                free
+            };
             self.paper_step.min(free)
         };
         if near {
@@ -422,8 +446,13 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         let spin = step == F::zero() && pts.is_empty() && rel.abs() > half;
         if spin && self.spun {
             heading = h;
-            let (free, margin) = free_margin::<F, M>(&rd, F::zero());
+            let (free, margin) = free_margin::<F, M>(&rd, F::zero(), offset);
             self.near(margin, F::zero());
+            let free = if set_back {
+                self.flank_free(x, y, h, free)
+            } else {
+                free
+            };
             step = (self.paper_step.min(free) / c(2.0)).floor();
             self.near(step, c(MIN_STEP));
             if step < c(MIN_STEP) {
@@ -435,15 +464,88 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
     }
 }
 
-/// The safety rule in float: how far the disc may go along `rel`.
-pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> F {
-    free_margin::<F, M>(rd, rel).0
+impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
+    /// With the sensors set back: keep what the view from (`x`, `y`) facing
+    /// `h` reads within [`NEAR`] of the rim (faces `offset` from the
+    /// centre). A point near a kept one replaces it; all places taken, the
+    /// kept point farthest from the rover (either axis) goes if the new one
+    /// is nearer.
+    fn saw_near(&mut self, x: F, y: F, h: F, rd: &[R<F>; 5], offset: F) {
+        let near = c::<F>(RADIUS + NEAR);
+        let merge = c::<F>(FLANK_MERGE);
+        for (i, r) in rd.iter().enumerate() {
+            let R::Range(mm) = *r else { continue };
+            let e = offset + mm;
+            self.near(e, near);
+            if e > near {
+                continue;
+            }
+            let a = h + c::<F>(ANGLES[i]).to_radians();
+            let p = (x + e * M::cos(a), y + e * M::sin(a));
+            let mut merged = false;
+            for k in 0..self.flank.len() {
+                let q = self.flank[k];
+                let (dx, dy) = ((q.0 - p.0).abs(), (q.1 - p.1).abs());
+                self.near(dx, merge);
+                self.near(dy, merge);
+                if dx < merge && dy < merge {
+                    self.flank[k] = p;
+                    merged = true;
+                    break;
+                }
+            }
+            if merged || self.flank.push(p).is_ok() {
+                continue;
+            }
+            let far = |q: &(F, F)| (q.0 - x).abs().max((q.1 - y).abs());
+            let mut k = 0;
+            for j in 1..self.flank.len() {
+                if far(&self.flank[j]) > far(&self.flank[k]) {
+                    k = j;
+                }
+            }
+            self.near(far(&p), far(&self.flank[k]));
+            if far(&p) < far(&self.flank[k]) {
+                self.flank[k] = p;
+            }
+        }
+    }
+
+    /// `free` along world heading `h` from (`x`, `y`), and the disc with the
+    /// clearance kept off the flank points.
+    fn flank_free(&mut self, x: F, y: F, h: F, mut free: F) -> F {
+        let rb = c::<F>(RADIUS + CLEARANCE);
+        let (cos, sin) = (M::cos(h), M::sin(h));
+        for i in 0..self.flank.len() {
+            let (px, py) = (self.flank[i].0 - x, self.flank[i].1 - y);
+            let along = px * cos + py * sin;
+            let lat = py * cos - px * sin;
+            self.near(along, F::zero());
+            self.near(lat.abs(), rb);
+            if along > F::zero() && lat.abs() < rb {
+                free = free.min((along - M::sqrt(rb * rb - lat * lat)).max(F::zero()));
+            }
+        }
+        free
+    }
+}
+
+/// An integer as `F` (no f64 on the way: the f32 build must not pull in
+/// double-precision routines).
+fn int_f<F: Float>(v: u32) -> F {
+    F::from(v).unwrap_or_else(F::zero)
+}
+
+/// The safety rule in float: how far the disc may go along `rel`, the
+/// sensor faces `offset` mm from the centre.
+pub fn free<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F, offset: F) -> F {
+    free_margin::<F, M>(rd, rel, offset).0
 }
 
 /// [`free`], and how near (mm) a beam's end came to the edge of the
 /// corridor (a decision boundary: just inside it blocks, just outside not).
-pub fn free_margin<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) -> (F, F) {
-    let (offset, rs) = (c::<F>(OFFSET), c::<F>(RADIUS + CLEARANCE));
+pub fn free_margin<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F, offset: F) -> (F, F) {
+    let rs = c::<F>(RADIUS + CLEARANCE);
     let reach = offset + c(RANGE);
     let mut free = reach - rs;
     let mut margin = F::infinity();
@@ -461,7 +563,7 @@ pub fn free_margin<F: Float + FloatConst, M: Math<F>>(rd: &[R<F>; 5], rel: F) ->
         if lat.abs() < rs {
             let mut limit = along - M::sqrt(rs * rs - lat * lat);
             if obstacle {
-                limit = limit.min(along - (offset + c(STANDOFF)));
+                limit = limit.min(along - c(RADIUS + STANDOFF));
             }
             free = free.min(limit.max(F::zero()));
         }
