@@ -42,7 +42,8 @@ enum Cmd {
         #[arg(long)]
         perfect: bool,
         /// The sensors set back from the rim by their minimum range (100
-        /// mm), at least at the centre; on the rim otherwise.
+        /// mm), at least at the centre; on the rim otherwise (the sensing
+        /// planners: `liquid` and `liquid-online` refuse it).
         #[arg(long)]
         set_back: bool,
     },
@@ -80,7 +81,8 @@ enum Cmd {
         /// Noise-free sensors.
         #[arg(long)]
         perfect: bool,
-        /// The sensors set back from the rim by their minimum range.
+        /// The sensors set back from the rim by their minimum range (the
+        /// sensing planners).
         #[arg(long)]
         set_back: bool,
     },
@@ -139,6 +141,18 @@ fn sensors(perfect: bool) -> SensorMode {
     }
 }
 
+/// `--set-back` is for planners that sense: the ones that plan over the
+/// map have no sensors to set back, and would run as without it.
+fn set_back_applies(set_back: bool, planners: &[PlannerKind]) -> Result<(), String> {
+    match planners.iter().find(|p| p.uses_map()) {
+        Some(p) if set_back => Err(format!(
+            "--set-back: planner {} plans over the map and has no sensors to set back",
+            p.name()
+        )),
+        _ => Ok(()),
+    }
+}
+
 fn real_main(cli: Cli) -> Result<(), String> {
     match cli.cmd {
         Cmd::Run {
@@ -150,6 +164,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             perfect,
             set_back,
         } => {
+            set_back_applies(set_back, &[planner])?;
             let sc = Scenario::load(&file).map_err(|e| e.to_string())?;
             let cfg = SimConfig {
                 planner,
@@ -252,6 +267,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                     planners.push(p);
                 }
             }
+            set_back_applies(set_back, &planners)?;
             let several = planners.len() > 1;
             let mut rows = Vec::new();
             for planner in &planners {

@@ -418,4 +418,16 @@ fn set_back_sensors_are_said_and_drive_another_way() {
         line.unwrap_or_default().to_string()
     };
     assert_ne!(length(&rim), length(&back), "the same path:\n{rim}\n{back}");
+    // A planner over the map has no sensors to set back: refused.
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["run", "--planner", "liquid", "--set-back"])
+        .arg(&u_trap)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        err.contains("--set-back: planner liquid plans over the map"),
+        "{err}"
+    );
 }
