@@ -125,10 +125,19 @@ fn an_odd_file_is_refused_with_its_key_or_runs_and_nothing_panics() {
                 }
                 Ok(sc) => {
                     ran.set(ran.get() + 1);
-                    // Every planner `--planner` offers.
-                    for &planner in PlannerKind::value_variants() {
+                    // Every planner `--planner` offers, and those that
+                    // sense with their sensors set back too.
+                    let sensing = PlannerKind::value_variants()
+                        .iter()
+                        .filter(|p| !p.uses_map());
+                    let runs = PlannerKind::value_variants()
+                        .iter()
+                        .map(|&p| (p, false))
+                        .chain(sensing.map(|&p| (p, true)));
+                    for (planner, set_back) in runs {
                         let cfg = SimConfig {
                             planner,
+                            set_back,
                             max_steps: 600,
                             ..SimConfig::default()
                         };
