@@ -322,21 +322,47 @@ pub fn drive_with(
     max_s: f64,
     unplug: Option<Unplug>,
 ) -> LoopRun {
+    drive_mounted(sc, seed, max_s, unplug, false)
+}
+
+/// [`drive`] for the firmware built for sensors set back from the rim (its
+/// `set-back` feature), the virtual sensors mounted alike.
+pub fn drive_set_back(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) -> LoopRun {
+    drive_mounted(sc, seed, max_s, None, true)
+}
+
+/// [`drive_with`], the sensors on the rim or `set_back` behind it (the
+/// firmware built alike).
+fn drive_mounted(
+    sc: &sim_host::scenario::Scenario,
+    seed: u64,
+    max_s: f64,
+    unplug: Option<Unplug>,
+    set_back: bool,
+) -> LoopRun {
     use sim_host::geom::V2;
     use sim_host::sensor::{SensorMode, VirtualSensors};
     use sim_host::world::World;
     let world = World::from_scenario(sc);
     let m_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick as f64 / 1e6;
     let base = planner_core::drive::Body::REFERENCE.wheel_base_mm as f64 / 1e3;
+    let adc = planner_core::AdcProfile::AVR_10BIT_5V;
+    // The firmware's geometry: its default configuration's.
+    let builder = planner_core::ConfigBuilder::new(adc);
+    let builder = if set_back {
+        builder.sensors_set_back()
+    } else {
+        builder
+    };
+    let cfg = builder.build().expect("the default configuration");
     let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
-    let mut sensors = VirtualSensors::new(
-        planner_core::AdcProfile::AVR_10BIT_5V,
-        SensorMode::REALISTIC,
-        angles,
-        0.1,
-        seed,
-    );
-    let mut a = Avr::boot();
+    let offset_m = cfg.sensor_offset_mm() as f64 / 1e3;
+    let mut sensors = VirtualSensors::new(adc, SensorMode::REALISTIC, angles, offset_m, seed);
+    let mut a = if set_back {
+        Avr::boot_elf(&set_back_firmware_elf())
+    } else {
+        Avr::boot()
+    };
     let (mut p, mut h) = (V2::new(sc.start[0], sc.start[1]), sc.start_heading_rad());
     let start = format!(
         "P {} {} {}",

@@ -2,17 +2,24 @@
 //! worlds and sensors on its ADC pins, its motor pins and encoder inputs
 //! closing the loop (see `rover_tests::avr::drive`).
 
-use rover_tests::avr::{drive, drive_with, ram_used, LoopOutcome, LoopRun, Unplug, RAM_BYTES};
+use rover_tests::avr::{
+    drive, drive_set_back, drive_with, ram_used, LoopOutcome, LoopRun, Unplug, RAM_BYTES,
+};
 use rover_tests::scenario;
 
 fn reaches(rel: &str) {
     let sc = scenario(rel);
     let run = drive(&sc, 1, 400.0);
+    report_and_check(&sc.name, &run, "sensors on the rim");
+}
+
+/// The drive `run` of the world `name` reached its goal, and stopped there.
+fn report_and_check(name: &str, run: &LoopRun, mounted: &str) {
     println!(
-        "{}: {:?} after {:.1} s, {} steps, {:.2} m driven, {:.3} m from the goal",
-        sc.name, run.outcome, run.seconds, run.steps, run.path_m, run.to_goal_m
+        "{name} ({mounted}): {:?} after {:.1} s, {} steps, {:.2} m driven, {:.3} m from the goal",
+        run.outcome, run.seconds, run.steps, run.path_m, run.to_goal_m
     );
-    assert_eq!(run.outcome, LoopOutcome::Reached, "{}", sc.name);
+    assert_eq!(run.outcome, LoopOutcome::Reached, "{name}");
     // The firmware stops when its odometry says it is within 50 mm; the
     // true error adds the odometry's drift (0.97 mm ticks, 0.43° heading
     // steps). With the harness's encoders edge-exact (an edge wherever the
@@ -24,14 +31,13 @@ fn reaches(rel: &str) {
     let bound_m = 0.05 + 0.005 * run.path_m;
     assert!(
         run.to_goal_m < bound_m,
-        "{}: {:.3} m from the goal after {:.2} m (bound {:.3} m)",
-        sc.name,
+        "{name}: {:.3} m from the goal after {:.2} m (bound {:.3} m)",
         run.to_goal_m,
         run.path_m,
         bound_m
     );
     // Arrived, it stays put: no PWM pulse after the line that says so.
-    stays_stopped(&run, &format!("{}: after arriving", sc.name));
+    stays_stopped(run, &format!("{name}: after arriving"));
 }
 
 /// After the line that says why it stopped, the firmware keeps its motors
@@ -61,6 +67,16 @@ fn drives_the_u_trap_to_the_goal() {
 #[test]
 fn drives_a_paper_world_to_the_goal() {
     reaches("paper/env1-ex1.toml");
+}
+
+/// The firmware built for sensors set back from the rim (its `set-back`
+/// feature), the emulated sensors mounted alike, drives the U-trap to the
+/// goal too.
+#[test]
+fn with_the_sensors_set_back_drives_the_u_trap_to_the_goal() {
+    let sc = scenario("traps/u-trap.toml");
+    let run = drive_set_back(&sc, 1, 400.0);
+    report_and_check(&sc.name, &run, "sensors set back");
 }
 
 /// A sensor unplugged on the way (its pin at 0 V, no reading a working
