@@ -14,19 +14,13 @@ use planner_core::{AdcProfile, Config, ConfigBuilder};
 
 /// The default configuration for the ATmega328P's 10-bit ADC at 5 V, the
 /// sensors on the rim (with the `set-back` feature, behind it).
-const DEFAULT: Config = match builder().build() {
+const DEFAULT: Config = match ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+    .sensors_set_back(cfg!(feature = "set-back"))
+    .build()
+{
     Ok(c) => c,
     Err(_) => panic!("the default configuration is refused"),
 };
-
-const fn builder() -> ConfigBuilder {
-    let b = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V);
-    if cfg!(feature = "set-back") {
-        b.sensors_set_back()
-    } else {
-        b
-    }
-}
 
 progmem! {
     static progmem CONFIG: Config = DEFAULT;

@@ -34,19 +34,14 @@ compile_error!("choose one of the features `board` and `qemu` (use --no-default-
 /// (`planner-core`'s builder is a `const fn`): a bad one fails the build,
 /// and the image holds the tables, not the code that computes them.
 /// The sensors on the rim; with the `set-back` feature, behind it.
-pub const CONFIG: planner_core::Config = match builder().build() {
-    Ok(c) => c,
-    Err(_) => panic!("the default configuration is refused"),
-};
-
-const fn builder() -> planner_core::ConfigBuilder {
-    let b = planner_core::ConfigBuilder::new(planner_core::AdcProfile::STM32_12BIT_3V3);
-    if cfg!(feature = "set-back") {
-        b.sensors_set_back()
-    } else {
-        b
-    }
-}
+pub const CONFIG: planner_core::Config =
+    match planner_core::ConfigBuilder::new(planner_core::AdcProfile::STM32_12BIT_3V3)
+        .sensors_set_back(cfg!(feature = "set-back"))
+        .build()
+    {
+        Ok(c) => c,
+        Err(_) => panic!("the default configuration is refused"),
+    };
 
 #[cortex_m_rt::entry]
 fn main() -> ! {

@@ -492,7 +492,7 @@ mod tests {
 
     fn set_back() -> Config {
         ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-            .sensors_set_back()
+            .sensors_set_back(true)
             .build()
             .unwrap()
     }

@@ -589,7 +589,7 @@ mod tests {
     #[cfg(feature = "set-back")]
     fn with_the_sensors_set_back_a_loop_closes_past_60_degrees() {
         let set_back = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-            .sensors_set_back()
+            .sensors_set_back(true)
             .build()
             .unwrap();
         assert!(set_back.sensors_set_back());

@@ -103,7 +103,7 @@ fn fixed_point_matches_the_float_reference() {
 #[test]
 fn with_the_sensors_set_back_fixed_point_matches_the_float_reference() {
     let c = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
-        .sensors_set_back()
+        .sensors_set_back(true)
         .escape(EscapeConfig {
             enabled: false,
             ..EscapeConfig::default()

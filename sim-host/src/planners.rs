@@ -124,15 +124,10 @@ impl SimPlanner {
     pub fn new(kind: PlannerKind, sc: &Scenario, adc: AdcProfile, set_back: bool) -> SimPlanner {
         let escape = escape_config(kind);
         let radius_mm = (sc.robot_radius * 1000.0).round().clamp(20.0, 1000.0) as u16;
-        let builder = ConfigBuilder::new(adc)
+        let cfg = ConfigBuilder::new(adc)
             .robot_radius_mm(radius_mm)
-            .escape(escape);
-        let builder = if set_back {
-            builder.sensors_set_back()
-        } else {
-            builder
-        };
-        let cfg = builder
+            .escape(escape)
+            .sensors_set_back(set_back)
             .build()
             .expect("the default configuration with a validated scenario radius is valid");
         let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));

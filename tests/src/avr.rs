@@ -76,10 +76,10 @@ pub fn elf_size(elf: &std::path::Path) -> (u32, u32, u32) {
 /// The ATmega328P's RAM, bytes.
 pub const RAM_BYTES: u32 = 2_048;
 
-/// RAM the firmware needs with a stack of `stack_peak` bytes: its static
-/// data (`.data` + `.bss` of the image) plus the stack; (data, bss, total).
-pub fn ram_used(stack_peak: u32) -> (u32, u32, u32) {
-    let (_, data, bss) = elf_size(&firmware_elf());
+/// RAM the image `elf` needs with a stack of `stack_peak` bytes: its
+/// static data (`.data` + `.bss`) plus the stack; (data, bss, total).
+pub fn ram_used(elf: &std::path::Path, stack_peak: u32) -> (u32, u32, u32) {
+    let (_, data, bss) = elf_size(elf);
     (data, bss, data + bss + stack_peak)
 }
 
@@ -284,6 +284,8 @@ pub struct LoopRun {
     /// the replayed traces do not (the boundary follower, the sensor
     /// fault), and their stack must fit the 2 KB of RAM too.
     pub stack_peak: Option<u32>,
+    /// The image that drove (the shipped build, or the `set-back` one).
+    pub elf: PathBuf,
 }
 
 /// Run the firmware for one millisecond, sampling its PWM pins every 16 µs:
@@ -348,21 +350,19 @@ fn drive_mounted(
     let base = planner_core::drive::Body::REFERENCE.wheel_base_mm as f64 / 1e3;
     let adc = planner_core::AdcProfile::AVR_10BIT_5V;
     // The firmware's geometry: its default configuration's.
-    let builder = planner_core::ConfigBuilder::new(adc);
-    let builder = if set_back {
-        builder.sensors_set_back()
-    } else {
-        builder
-    };
-    let cfg = builder.build().expect("the default configuration");
+    let cfg = planner_core::ConfigBuilder::new(adc)
+        .sensors_set_back(set_back)
+        .build()
+        .expect("the default configuration");
     let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
     let offset_m = cfg.sensor_offset_mm() as f64 / 1e3;
     let mut sensors = VirtualSensors::new(adc, SensorMode::REALISTIC, angles, offset_m, seed);
-    let mut a = if set_back {
-        Avr::boot_elf(&set_back_firmware_elf())
+    let elf = if set_back {
+        set_back_firmware_elf()
     } else {
-        Avr::boot()
+        firmware_elf()
     };
+    let mut a = Avr::boot_elf(&elf);
     let (mut p, mut h) = (V2::new(sc.start[0], sc.start[1]), sc.start_heading_rad());
     let start = format!(
         "P {} {} {}",
@@ -481,5 +481,6 @@ fn drive_mounted(
         to_goal_m: p.dist(goal),
         after_stop,
         stack_peak,
+        elf,
     }
 }

@@ -139,13 +139,10 @@ pub fn record_with(
     set_back: bool,
 ) -> Trace {
     let world = World::from_scenario(sc);
-    let builder = ConfigBuilder::new(adc);
-    let builder = if set_back {
-        builder.sensors_set_back()
-    } else {
-        builder
-    };
-    let cfg = builder.build().expect("default config");
+    let cfg = ConfigBuilder::new(adc)
+        .sensors_set_back(set_back)
+        .build()
+        .expect("default config");
     let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
     let angles = cfg.sensor_angles().map(to_rad);
     let offset = cfg.sensor_offset_mm() as f64 / 1000.0;

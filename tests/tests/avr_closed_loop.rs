@@ -50,7 +50,7 @@ fn stays_stopped(run: &LoopRun, what: &str) {
     assert_eq!(high, 0, "{what}: motor pulses");
     assert!(moved_m < 1e-3, "{what}: moved {moved_m} m");
     let peak = run.stack_peak.expect("the firmware's stack peak (M)");
-    let (data, bss, used) = ram_used(peak);
+    let (data, bss, used) = ram_used(&run.elf, peak);
     println!("{what}: stack_peak={peak} data={data} bss={bss}");
     assert!(
         used <= RAM_BYTES,

@@ -73,7 +73,7 @@ fn replay_is_bit_exact() {
 #[test]
 fn ram_within_budget() {
     let (_, _, peak) = replayed();
-    let (data, bss, used) = ram_used(*peak);
+    let (data, bss, used) = ram_used(&firmware_elf(), *peak);
     println!("avr ram: data={data} bss={bss} stack_peak={peak}");
     assert!(data + bss <= 768, "data + bss {} > 768 B", data + bss);
     // The stack must not have reached the static data (2 KB of RAM).
@@ -87,10 +87,17 @@ fn ram_within_budget() {
 #[test]
 fn stack_bound_fits_ram_and_covers_the_measured_peak() {
     let (_, _, peak) = replayed();
-    let bound = stack_bound(&firmware_elf()).unwrap_or_else(|e| panic!("no stack bound: {e}"));
-    let (data, bss, _) = ram_used(*peak);
+    stack_bound_fits_ram("avr stack", &firmware_elf(), *peak);
+}
+
+/// The stack bound of the image `elf` from its call graph (printed as
+/// `what`) is at least the `peak` painting measured and fits the RAM beside
+/// the image's statics.
+fn stack_bound_fits_ram(what: &str, elf: &std::path::Path, peak: u32) {
+    let bound = stack_bound(elf).unwrap_or_else(|e| panic!("no stack bound: {e}"));
+    let (data, bss, _) = ram_used(elf, peak);
     println!(
-        "avr stack: bound {} bytes (measured peak {peak}; {} to spare in RAM), by {} with {} on top ({} bytes)",
+        "{what}: bound {} bytes (measured peak {peak}; {} to spare in RAM), by {} with {} on top ({} bytes)",
         bound.bytes,
         RAM_BYTES - (data + bss + bound.bytes).min(RAM_BYTES),
         bound.path.join(" > "),
@@ -98,7 +105,7 @@ fn stack_bound_fits_ram_and_covers_the_measured_peak() {
         bound.interrupt.1
     );
     assert!(
-        bound.bytes >= *peak,
+        bound.bytes >= peak,
         "bound {} < measured peak {peak}: the call graph misses a path",
         bound.bytes
     );
@@ -184,24 +191,7 @@ fn set_back_build_replays_bit_exact_and_fits_an_uno() {
         "avr set-back step cycles over {steps} steps: mean={mean} worst={worst}; stack_peak={peak}"
     );
     // Its stack's bound from the call graph too, as for the shipped build.
-    let bound = stack_bound(&elf).unwrap_or_else(|e| panic!("no stack bound: {e}"));
-    let (_, data, bss) = elf_size(&elf);
-    println!(
-        "avr set-back stack: bound {} bytes (measured peak {peak}; {} to spare in RAM)",
-        bound.bytes,
-        RAM_BYTES - (data + bss + bound.bytes).min(RAM_BYTES)
-    );
-    assert!(
-        bound.bytes >= peak,
-        "bound {} < measured peak {peak}",
-        bound.bytes
-    );
-    assert!(
-        data + bss + bound.bytes <= RAM_BYTES,
-        "statics {} + stack bound {} overflow RAM",
-        data + bss,
-        bound.bytes
-    );
+    stack_bound_fits_ram("avr set-back stack", &elf, peak);
 }
 
 /// No code path of the firmware (planner-core included) can panic: the
