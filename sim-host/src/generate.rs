@@ -22,6 +22,12 @@ pub enum Kind {
     /// thick), each turned at random. A goal the walls close off is
     /// written `solvable = false`.
     Boxes,
+    /// The box world of the same seed with a closed ring of thin walls
+    /// round the goal (odd seeds) or round the start (even seeds): 5–9
+    /// corners at 0.7–2.2 m from it, a star shape, often with pockets.
+    /// Every goal is walled in (`solvable = false`): the right outcome is
+    /// to report it unreachable.
+    Walled,
 }
 
 impl Kind {
@@ -30,6 +36,7 @@ impl Kind {
         match self {
             Kind::Circles => "gen",
             Kind::Boxes => "box",
+            Kind::Walled => "walled",
         }
     }
 
@@ -38,6 +45,7 @@ impl Kind {
         match self {
             Kind::Circles => "random circle world with the EAPF paper's environment 2 parameters",
             Kind::Boxes => "random world of turned boxes and thin walls in the EAPF paper's environment 2 arena",
+            Kind::Walled => "random world of turned boxes and thin walls with the goal or the start walled in: unsolvable",
         }
     }
 }
@@ -49,6 +57,10 @@ const BOX_SIDES: [f64; 2] = [0.15, 1.5];
 const WALLS: usize = 30;
 const WALL_LENGTHS: [f64; 2] = [0.8, 2.5];
 const WALL_THICKNESS: f64 = 0.06;
+/// A walled world's ring: its corners' count and their distances from the
+/// point walled in, m.
+const RING_CORNERS: [usize; 2] = [5, 9];
+const RING_RADII: [f64; 2] = [0.7, 2.2];
 
 /// A box world's goal is written unsolvable only when the reference finds
 /// no path for a disc of a radius this much smaller (m) either: the
@@ -145,6 +157,7 @@ pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64)
     match kind {
         Kind::Circles => w.to_toml(kind.description()),
         Kind::Boxes => w.boxes_toml(kind.description()),
+        Kind::Walled => w.walled_toml(kind.description()),
     }
 }
 
@@ -155,10 +168,69 @@ impl RandomWorld {
     /// the whole world while the reference cannot tell whether the goal is
     /// closed off (see [`UNSOLVABLE_MARGIN_M`]).
     pub fn boxes_toml(&self, description: &str) -> String {
-        let mut rng = Pcg64::seed_from_u64(self.seed);
+        self.boxes_with(description, &[])
+    }
+
+    /// A walled world's file text ([`Kind::Walled`]): the box world of
+    /// the same seed and a closed ring of walls round the goal (odd seeds)
+    /// or the start (even seeds), drawn from its own stream so that the
+    /// boxes are those of `box-<seed>`.
+    pub fn walled_toml(&self, description: &str) -> String {
+        let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x5741_4c4c);
+        let inside = if self.seed % 2 == 1 {
+            self.goal
+        } else {
+            self.start
+        };
         let keep = self.robot_radius + 0.15;
         loop {
+            let n = rng.gen_range(RING_CORNERS[0]..=RING_CORNERS[1]);
+            let corners: Vec<[f64; 2]> = (0..n)
+                .map(|i| {
+                    let a = (i as f64 + rng.gen_range(-0.3..0.3)) * 2.0 * PI / n as f64;
+                    let r = rng.gen_range(RING_RADII[0]..=RING_RADII[1]);
+                    [inside[0] + r * a.cos(), inside[1] + r * a.sin()]
+                })
+                .collect();
+            // Each wall runs half its thickness past both corners, so
+            // that neighbours overlap there and the ring is closed.
+            let walls: Vec<TurnedBox> = (0..n)
+                .map(|i| {
+                    let (a, b) = (corners[i], corners[(i + 1) % n]);
+                    let (dx, dy) = (b[0] - a[0], b[1] - a[1]);
+                    TurnedBox {
+                        c: [(a[0] + b[0]) / 2.0, (a[1] + b[1]) / 2.0],
+                        half: [
+                            dx.hypot(dy) / 2.0 + WALL_THICKNESS / 2.0,
+                            WALL_THICKNESS / 2.0,
+                        ],
+                        turn: dy.atan2(dx),
+                    }
+                })
+                .collect();
+            if walls.iter().all(|w| w.distance(inside) > keep) {
+                return self.boxes_with(description, &walls);
+            }
+        }
+    }
+
+    /// The box world of `self`'s seed with `extra` shapes added.
+    fn boxes_with(&self, description: &str, extra: &[TurnedBox]) -> String {
+        let mut rng = Pcg64::seed_from_u64(self.seed);
+        let keep = self.robot_radius + 0.15;
+        let polygon = |body: &mut String, b: &TurnedBox| {
+            let points: Vec<String> = b
+                .corners()
+                .iter()
+                .map(|p| format!("[{:.3}, {:.3}]", p[0], p[1]))
+                .collect();
+            let _ = writeln!(body, "\n[[polygon]]\npoints = [{}]", points.join(", "));
+        };
+        loop {
             let mut body = String::new();
+            for b in extra {
+                polygon(&mut body, b);
+            }
             let mut n = 0;
             while n < BOXES + WALLS {
                 let (w, h) = if n < BOXES {
@@ -185,12 +257,7 @@ impl RandomWorld {
                 if b.distance(self.start) <= keep || b.distance(self.goal) <= keep {
                     continue;
                 }
-                let points: Vec<String> = b
-                    .corners()
-                    .iter()
-                    .map(|p| format!("[{:.3}, {:.3}]", p[0], p[1]))
-                    .collect();
-                let _ = writeln!(body, "\n[[polygon]]\npoints = [{}]", points.join(", "));
+                polygon(&mut body, &b);
                 n += 1;
             }
             let head = |solvable: bool| {
@@ -203,6 +270,9 @@ impl RandomWorld {
                     "# generated: seed {}, {BOXES} boxes of sides {}..{} m, {WALLS} walls {}..{} m long",
                     self.seed, BOX_SIDES[0], BOX_SIDES[1], WALL_LENGTHS[0], WALL_LENGTHS[1]
                 );
+                if !extra.is_empty() {
+                    let _ = writeln!(s, "# and first a closed ring of {} walls", extra.len());
+                }
                 s + &body
             };
             let text = head(true);
@@ -291,6 +361,45 @@ mod tests {
                     "seed {seed}: {clear}"
                 );
             }
+        }
+    }
+
+    #[test]
+    fn walled_worlds_are_the_box_world_and_a_closed_ring_round_the_goal_or_start() {
+        let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
+        for seed in 1..=4 {
+            let text = world(Kind::Walled, "w", start, goal, seed);
+            assert_eq!(text, world(Kind::Walled, "w", start, goal, seed));
+            let sc = crate::scenario::Scenario::parse(&text, std::path::Path::new("w")).unwrap();
+            assert!(!sc.solvable, "seed {seed}");
+            let ring = sc.polygon.len() - (BOXES + WALLS);
+            assert!(
+                (RING_CORNERS[0]..=RING_CORNERS[1]).contains(&ring),
+                "seed {seed}: {ring} walls"
+            );
+            // The boxes are box-<seed>'s, after the ring's walls.
+            let boxes = world(Kind::Boxes, "w", start, goal, seed);
+            let boxes =
+                crate::scenario::Scenario::parse(&boxes, std::path::Path::new("w")).unwrap();
+            assert_eq!(sc.polygon[ring..], boxes.polygon[..], "seed {seed}");
+            // Odd seeds wall the goal in, even ones the start: without the
+            // ring that point is the box world's, and with it no disc of
+            // any size gets from one to the other.
+            let inside = if seed % 2 == 1 { goal } else { start };
+            let w = crate::world::World::from_scenario(&sc);
+            let clear = w.clearance(crate::geom::V2::new(inside[0], inside[1]), 0.0);
+            assert!(
+                clear > sc.robot_radius + 0.15 - 1e-9,
+                "seed {seed}: {clear}"
+            );
+            let tiny = crate::scenario::Scenario {
+                robot_radius: 0.01,
+                ..sc.clone()
+            };
+            assert!(
+                shortest_path(&tiny).is_none(),
+                "seed {seed}: the ring is open"
+            );
         }
     }
 

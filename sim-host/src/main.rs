@@ -87,7 +87,8 @@ enum Cmd {
         set_back: bool,
     },
     /// Write a random world in the paper's environment 2 arena: circles
-    /// with its parameters, or turned boxes and walls (`--kind`).
+    /// with its parameters, or turned boxes and walls, walled in or not
+    /// (`--kind`).
     Gen {
         /// Output file (with `--count`, a folder).
         out: PathBuf,
@@ -106,8 +107,10 @@ enum Cmd {
         #[arg(long, num_args = 2, default_values_t = [12.7, 9.75])]
         goal: Vec<f64>,
         /// What the world is made of: `circles` (the paper's environment
-        /// 2), or `boxes` (turned boxes and thin walls; with `--count`
-        /// named `box-<seed>.toml`).
+        /// 2), `boxes` (turned boxes and thin walls; with `--count` named
+        /// `box-<seed>.toml`), or `walled` (a box world with a closed ring
+        /// of walls round the goal or the start: unsolvable;
+        /// `walled-<seed>.toml`).
         #[arg(long, value_enum, default_value = "circles")]
         kind: generate::Kind,
     },
