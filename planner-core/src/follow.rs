@@ -68,8 +68,9 @@ pub const SIGHT_MM: u16 = 300;
 /// (`gen --kind walled`) are reported unreachable 958 times in 1,000,
 /// against 607 at 12 (the rest ran out of the simulator's budget first,
 /// the follower going round islands that do not hold the goal), and no
-/// reachable goal of the other sets is lost; at 4, 994, but 8 more box
-/// world goals reported unreachable (docs/bench.md, "Walled worlds").
+/// other set reaches fewer goals (one box-world timeout becomes a report:
+/// 6 reachable goals reported unreachable of 1,000, 5 at 12); at 4, 994,
+/// but 13 (docs/bench.md, "Walled worlds").
 pub const BUDGET_GIVE_UPS: u16 = 6;
 /// Cycles in a row with nothing in sight after which the boundary is lost:
 /// more than the turns to the sector's edge that bring a convex corner back

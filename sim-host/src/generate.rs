@@ -339,7 +339,7 @@ mod tests {
         let w = RandomWorld::paper_env2("g", [6.0, 7.3], [12.7, 9.75], 3);
         let a = w.to_toml("test");
         assert_eq!(a, w.to_toml("test"));
-        let sc = crate::scenario::Scenario::parse(&a, std::path::Path::new("g")).unwrap();
+        let sc = parsed(&a);
         assert_eq!(sc.circle.len(), 80);
         assert!(sc.circle.iter().all(|c| (0.12..=0.9).contains(&c.radius)));
     }
@@ -351,17 +351,28 @@ mod tests {
             let a = world(Kind::Boxes, "b", start, goal, seed);
             assert_eq!(a, world(Kind::Boxes, "b", start, goal, seed));
             assert_ne!(a, world(Kind::Boxes, "b", start, goal, seed + 1));
-            let sc = crate::scenario::Scenario::parse(&a, std::path::Path::new("b")).unwrap();
+            let sc = parsed(&a);
             assert_eq!(sc.polygon.len(), BOXES + WALLS);
-            let w = crate::world::World::from_scenario(&sc);
             for p in [start, goal] {
-                let clear = w.clearance(crate::geom::V2::new(p[0], p[1]), 0.0);
-                assert!(
-                    clear > sc.robot_radius + 0.15 - 1e-9,
-                    "seed {seed}: {clear}"
-                );
+                assert_kept_clear(&sc, p, seed);
             }
         }
+    }
+
+    /// A generated file, parsed.
+    fn parsed(text: &str) -> Scenario {
+        Scenario::parse(text, std::path::Path::new("gen")).unwrap()
+    }
+
+    /// Nothing of `sc` within `robot_radius + 0.15` m of `p` (what the
+    /// generators keep clear round the start and the goal).
+    fn assert_kept_clear(sc: &Scenario, p: [f64; 2], seed: u64) {
+        let w = crate::world::World::from_scenario(sc);
+        let clear = w.clearance(crate::geom::V2::new(p[0], p[1]), 0.0);
+        assert!(
+            clear > sc.robot_radius + 0.15 - 1e-9,
+            "seed {seed}: {clear}"
+        );
     }
 
     #[test]
@@ -370,7 +381,7 @@ mod tests {
         for seed in 1..=4 {
             let text = world(Kind::Walled, "w", start, goal, seed);
             assert_eq!(text, world(Kind::Walled, "w", start, goal, seed));
-            let sc = crate::scenario::Scenario::parse(&text, std::path::Path::new("w")).unwrap();
+            let sc = parsed(&text);
             assert!(!sc.solvable, "seed {seed}");
             let ring = sc.polygon.len() - (BOXES + WALLS);
             assert!(
@@ -378,21 +389,14 @@ mod tests {
                 "seed {seed}: {ring} walls"
             );
             // The boxes are box-<seed>'s, after the ring's walls.
-            let boxes = world(Kind::Boxes, "w", start, goal, seed);
-            let boxes =
-                crate::scenario::Scenario::parse(&boxes, std::path::Path::new("w")).unwrap();
+            let boxes = parsed(&world(Kind::Boxes, "w", start, goal, seed));
             assert_eq!(sc.polygon[ring..], boxes.polygon[..], "seed {seed}");
             // Odd seeds wall the goal in, even ones the start: without the
             // ring that point is the box world's, and with it no disc of
             // any size gets from one to the other.
             let inside = if seed % 2 == 1 { goal } else { start };
-            let w = crate::world::World::from_scenario(&sc);
-            let clear = w.clearance(crate::geom::V2::new(inside[0], inside[1]), 0.0);
-            assert!(
-                clear > sc.robot_radius + 0.15 - 1e-9,
-                "seed {seed}: {clear}"
-            );
-            let tiny = crate::scenario::Scenario {
+            assert_kept_clear(&sc, inside, seed);
+            let tiny = Scenario {
                 robot_radius: 0.01,
                 ..sc.clone()
             };
@@ -414,7 +418,7 @@ mod tests {
                  [[polygon]]\npoints = [[1.9, -0.1], [2.1, -0.1], [2.1, {a}], [1.9, {a}]]\n\
                  [[polygon]]\npoints = [[1.9, {b}], [2.1, {b}], [2.1, 3.1], [1.9, 3.1]]\n"
             );
-            crate::scenario::Scenario::parse(&text, std::path::Path::new("w")).unwrap()
+            parsed(&text)
         };
         assert_eq!(reachable(&walled(0.0)), Some(false));
         assert_eq!(reachable(&walled(0.1)), Some(false));
