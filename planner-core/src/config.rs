@@ -78,7 +78,7 @@ pub struct Config {
     /// feature: the firmwares' configuration, built without it, keeps the
     /// layout their step was measured with. Kept rather than worked out
     /// from the offset and radius at each use: that took 88 bytes of the
-    /// AVR set-back image's 158 to spare beside an Uno's bootloader
+    /// 158 the AVR set-back image then had to spare beside an Uno's bootloader
     /// (`avr_firmware`'s `set_back_build_replays_bit_exact_and_fits_an_uno`).
     #[cfg(feature = "set-back")]
     pub(crate) set_back: bool,

@@ -375,7 +375,7 @@ impl Planner {
                 self.unreachable = true;
                 return stop(Status::Unreachable);
             }
-            self.follow.start();
+            self.follow.start(self.looped_once);
         }
         if self.follow.active() {
             #[cfg(feature = "set-back")]
@@ -405,7 +405,9 @@ impl Planner {
                 // squeeze through is one the follower passes by (its way
                 // must be free for `FOLLOW_FREE_MM`), so the first loop may
                 // close round a goal that is not walled in (barn-tight-206,
-                // seed 1). The second loop is the answer.
+                // seed 1). The second loop is the answer; that round only
+                // confirms the first, so its follower has the shorter
+                // budget (`follow::SECOND_GIVE_UPS`).
                 FollowVerdict::Looped if !self.looped_once => {
                     self.looped_once = true;
                     self.follow = follow::Follow::default();
