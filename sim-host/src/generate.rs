@@ -57,6 +57,8 @@ const BOX_SIDES: [f64; 2] = [0.15, 1.5];
 const WALLS: usize = 30;
 const WALL_LENGTHS: [f64; 2] = [0.8, 2.5];
 const WALL_THICKNESS: f64 = 0.06;
+/// Kept clear round the start and the goal beyond the robot's radius, m.
+const KEEP_CLEAR_M: f64 = 0.15;
 /// A walled world's ring: its corners' count and their distances from the
 /// point walled in, m.
 const RING_CORNERS: [usize; 2] = [5, 9];
@@ -121,7 +123,7 @@ impl RandomWorld {
     }
 
     /// The scenario file text. Circles that would come within
-    /// `robot_radius + 0.15` m of the start or goal are drawn again.
+    /// `robot_radius + KEEP_CLEAR_M` (0.15 m) of the start or goal are drawn again.
     pub fn to_toml(&self, description: &str) -> String {
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let mut s = self.header(description);
@@ -130,7 +132,7 @@ impl RandomWorld {
             "# generated: seed {}, {} circles, radii {}..{} m",
             self.seed, self.circles, self.radii[0], self.radii[1]
         );
-        let keep = self.robot_radius + 0.15;
+        let keep = self.keep_clear_m();
         let mut n = 0;
         while n < self.circles {
             let r = rng.gen_range(self.radii[0]..=self.radii[1]);
@@ -164,11 +166,16 @@ pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64)
 impl RandomWorld {
     /// A box world's file text ([`Kind::Boxes`]): the arena, start, goal,
     /// robot and seed of `self`. Shapes that would come within
-    /// `robot_radius + 0.15` m of the start or goal are drawn again; so is
+    /// `robot_radius + KEEP_CLEAR_M` (0.15 m) of the start or goal are drawn again; so is
     /// the whole world while the reference cannot tell whether the goal is
     /// closed off (see [`UNSOLVABLE_MARGIN_M`]).
     pub fn boxes_toml(&self, description: &str) -> String {
         self.boxes_with(description, &[])
+    }
+
+    /// What nothing may come within round the start and the goal, m.
+    fn keep_clear_m(&self) -> f64 {
+        self.robot_radius + KEEP_CLEAR_M
     }
 
     /// A walled world's file text ([`Kind::Walled`]): the box world of
@@ -182,7 +189,7 @@ impl RandomWorld {
         } else {
             self.start
         };
-        let keep = self.robot_radius + 0.15;
+        let keep = self.keep_clear_m();
         loop {
             let n = rng.gen_range(RING_CORNERS[0]..=RING_CORNERS[1]);
             let corners: Vec<[f64; 2]> = (0..n)
@@ -217,7 +224,7 @@ impl RandomWorld {
     /// The box world of `self`'s seed with `extra` shapes added.
     fn boxes_with(&self, description: &str, extra: &[TurnedBox]) -> String {
         let mut rng = Pcg64::seed_from_u64(self.seed);
-        let keep = self.robot_radius + 0.15;
+        let keep = self.keep_clear_m();
         let polygon = |body: &mut String, b: &TurnedBox| {
             let points: Vec<String> = b
                 .corners()
@@ -336,7 +343,7 @@ mod tests {
 
     #[test]
     fn generated_worlds_are_valid_and_seeded() {
-        let w = RandomWorld::paper_env2("g", [6.0, 7.3], [12.7, 9.75], 3);
+        let w = RandomWorld::paper_env2("g", START, GOAL, 3);
         let a = w.to_toml("test");
         assert_eq!(a, w.to_toml("test"));
         let sc = parsed(&a);
@@ -344,13 +351,24 @@ mod tests {
         assert!(sc.circle.iter().all(|c| (0.12..=0.9).contains(&c.radius)));
     }
 
+    /// The tests' start and goal (the CLI's defaults).
+    const START: [f64; 2] = [6.0, 7.3];
+    const GOAL: [f64; 2] = [12.7, 9.75];
+
+    /// `kind`'s world of `seed` between [`START`] and [`GOAL`], which must
+    /// come out the same twice.
+    fn generated(kind: Kind, seed: u64) -> String {
+        let text = world(kind, "g", START, GOAL, seed);
+        assert_eq!(text, world(kind, "g", START, GOAL, seed), "seed {seed}");
+        text
+    }
+
     #[test]
     fn box_worlds_are_valid_seeded_and_keep_clear_of_start_and_goal() {
-        let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
+        let (start, goal) = (START, GOAL);
         for seed in 1..=4 {
-            let a = world(Kind::Boxes, "b", start, goal, seed);
-            assert_eq!(a, world(Kind::Boxes, "b", start, goal, seed));
-            assert_ne!(a, world(Kind::Boxes, "b", start, goal, seed + 1));
+            let a = generated(Kind::Boxes, seed);
+            assert_ne!(a, generated(Kind::Boxes, seed + 1));
             let sc = parsed(&a);
             assert_eq!(sc.polygon.len(), BOXES + WALLS);
             for p in [start, goal] {
@@ -364,24 +382,22 @@ mod tests {
         Scenario::parse(text, std::path::Path::new("gen")).unwrap()
     }
 
-    /// Nothing of `sc` within `robot_radius + 0.15` m of `p` (what the
-    /// generators keep clear round the start and the goal).
+    /// Nothing of `sc` within `robot_radius + KEEP_CLEAR_M` of `p` (what
+    /// the generators keep clear round the start and the goal).
     fn assert_kept_clear(sc: &Scenario, p: [f64; 2], seed: u64) {
         let w = crate::world::World::from_scenario(sc);
         let clear = w.clearance(crate::geom::V2::new(p[0], p[1]), 0.0);
         assert!(
-            clear > sc.robot_radius + 0.15 - 1e-9,
+            clear > sc.robot_radius + KEEP_CLEAR_M - 1e-9,
             "seed {seed}: {clear}"
         );
     }
 
     #[test]
     fn walled_worlds_are_the_box_world_and_a_closed_ring_round_the_goal_or_start() {
-        let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
+        let (start, goal) = (START, GOAL);
         for seed in 1..=4 {
-            let text = world(Kind::Walled, "w", start, goal, seed);
-            assert_eq!(text, world(Kind::Walled, "w", start, goal, seed));
-            let sc = parsed(&text);
+            let sc = parsed(&generated(Kind::Walled, seed));
             assert!(!sc.solvable, "seed {seed}");
             let ring = sc.polygon.len() - (BOXES + WALLS);
             assert!(
@@ -389,7 +405,7 @@ mod tests {
                 "seed {seed}: {ring} walls"
             );
             // The boxes are box-<seed>'s, after the ring's walls.
-            let boxes = parsed(&world(Kind::Boxes, "w", start, goal, seed));
+            let boxes = parsed(&generated(Kind::Boxes, seed));
             assert_eq!(sc.polygon[ring..], boxes.polygon[..], "seed {seed}");
             // Odd seeds wall the goal in, even ones the start: without the
             // ring that point is the box world's, and with it no disc of

@@ -396,17 +396,20 @@ fn generated_walled_in_goals_are_reported_unreachable() {
 }
 
 /// Walled worlds whose first loop round the ring hands back to the
-/// potential field, so that the report comes from a second round: with
-/// that round's follower given as long as the first
-/// (`follow::SECOND_GIVE_UPS` at 6, not 3), each of these ran out of the
-/// simulator's budget before the second loop closed (checked).
+/// potential field, so that the report comes from a second round. With
+/// that round's follower given as long as the first, each of these ran out
+/// of the simulator's budget before the second loop closed when both were
+/// 6 give-up budgets; with both at 5 (`follow::BUDGET_GIVE_UPS` now, and
+/// `follow::SECOND_GIVE_UPS` at 5, not 3) walled-71 still does, after
+/// 2,186 cycles (checked).
 #[test]
 fn walled_in_goals_are_reported_after_a_shorter_second_round() {
     assert_walled_reported(&[47, 71, 79, 87]);
 }
 
-/// A walled world whose first round meets a second hit point on the ring
-/// and follows the ring and the boxes beside it from there: with the
+/// A walled world whose first round meets a second hit point, 1.5 m from
+/// the goal, and follows on from there round the ring and the boxes
+/// beside it (`SIM_DEBUG=1 sim-host run`): with the
 /// first round's budget at 6 give-up budgets, not 5
 /// (`follow::BUDGET_GIVE_UPS`), it ran out of the simulator's budget
 /// before the budget said "unreachable" (checked).
