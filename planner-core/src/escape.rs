@@ -299,24 +299,12 @@ fn reach_mm(law: &Law, weight: u8) -> u16 {
         return reach_of(v_r, h);
     }
     // More drops never reach less: `h₁` is a lower bound. And `k³ ≥ w`
-    // gives an upper one, `(k·h₁)³ ≥ k³·16·p ≥ 16·w·p` (1.3125³ > 2, with
-    // the floors' loss made up by the + 1): a merge into a held obstacle
-    // (most often its second drop) searches a few values, not 1,024.
-    if weight == 2 {
-        // ∛2·h₁ = 1.26·h₁ within a step or two: walk to the least `h`
-        // instead of halving (the second drop is the common merge).
-        let need = need(law.rim, weight);
-        let mut e = (h + (h >> 2) + 1).min(1_024);
-        while e < 1_024 && e * e * e < need {
-            e += 1;
-        }
-        while e > 0 && (e - 1) * (e - 1) * (e - 1) >= need {
-            e -= 1;
-        }
-        return reach_of(v_r, e);
-    }
+    // gives an upper one, `(k·h₁)³ ≥ k³·16·p ≥ 16·w·p`: a merge into a
+    // held obstacle (most often its second drop) searches a few values,
+    // not 1,024. (A walk up from `1.26·h₁` for the second drop, as it
+    // once had, cost the AVR image 452 bytes for the same answer.)
     let hi = match weight {
-        3..=8 => 2 * h,
+        2..=8 => 2 * h,
         9..=27 => 3 * h,
         28..=64 => 4 * h,
         _ => 7 * h,
