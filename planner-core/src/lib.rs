@@ -690,12 +690,7 @@ impl Planner {
                 let found = if stopped {
                     None
                 } else {
-                    self.follow
-                        .turns(cfg)
-                        .into_iter()
-                        .map(|turn| (turn, free(turn)))
-                        .filter(|&(_, way)| way >= follow::FOLLOW_FREE_MM)
-                        .nth(self.follow.turns_to_skip())
+                    self.follow.hug(cfg, free)
                 };
                 let (turn, way) = found.unwrap_or((Angle::ZERO, free(Angle::ZERO)));
                 if way.min(most) < cfg.min_step_mm {
@@ -710,6 +705,7 @@ impl Planner {
         // (else, turning round in a tight pocket, each outer beam's view of
         // a free way read "too close" through its own last look at the
         // wall, and no heading was ever free: gen-223, seed 1).
+        self.follow.note_turn(cfg, turn, step);
         Planner::count_turn(&mut self.turned_in_place, moved, turn);
         self.command(pose.position, pose.heading.add(turn), step)
     }

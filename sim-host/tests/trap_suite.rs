@@ -306,11 +306,22 @@ fn the_u_trap_is_reached_with_every_seed() {
 /// worlds (`gen --kind boxes --count 200 --seed 1`), run with the sensors
 /// on the rim or `set_back`: each run's name, seed and outcome.
 fn known_collision_box_runs(set_back: bool) -> Vec<(String, u64, Outcome)> {
+    box_runs(&[(145, 2), (200, 3), (105, 4)], set_back)
+}
+
+/// Generated box worlds (`gen --kind boxes`, each `box-<world seed>`), each
+/// run with its seed and the sensors on the rim or `set_back`: each run's
+/// name, seed and outcome.
+fn box_runs(runs: &[(u64, u64)], set_back: bool) -> Vec<(String, u64, Outcome)> {
     use sim_host::generate::{world, Kind};
-    let dir = std::env::temp_dir().join(format!("boxes-{set_back}-{}", std::process::id()));
+    let dir = std::env::temp_dir().join(format!(
+        "boxes-{set_back}-{}-{}",
+        std::process::id(),
+        runs[0].0
+    ));
     std::fs::create_dir_all(&dir).unwrap();
-    let mut runs = Vec::new();
-    for (world_seed, seed) in [(145, 2), (200, 3), (105, 4)] {
+    let mut out = Vec::new();
+    for &(world_seed, seed) in runs {
         let name = format!("box-{world_seed}");
         let file = dir.join(format!("{name}.toml"));
         let text = world(Kind::Boxes, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
@@ -321,10 +332,28 @@ fn known_collision_box_runs(set_back: bool) -> Vec<(String, u64, Outcome)> {
             ..SimConfig::default()
         };
         let rows = run_all(&[file], &cfg, false).unwrap();
-        runs.push((name, seed, rows[0].outcome));
+        println!(
+            "{name} seed {seed}: {} after {} cycles",
+            rows[0].outcome.as_str(),
+            rows[0].steps
+        );
+        out.push((name, seed, rows[0].outcome));
     }
     std::fs::remove_dir_all(&dir).ok();
-    runs
+    out
+}
+
+/// Box worlds where the boundary follower went round in a circle of nine
+/// 40° turns (the sector's edge towards the boundary, free each time, with
+/// what it had met ahead), back to the same seek and hit, until the
+/// simulator's budget ran out. After a whole circle the follower passes
+/// what blocks on its side (`follow::Follow::hug`); without that rule each
+/// of these times out (checked).
+#[test]
+fn box_world_followers_leave_their_circles() {
+    for (name, seed, outcome) in box_runs(&[(51, 1), (144, 1), (69, 4)], false) {
+        assert_eq!(outcome, Outcome::Reached, "{name} with seed {seed}");
+    }
 }
 
 /// The three collisions with the sensors on the rim (docs/bench.md, "Known
