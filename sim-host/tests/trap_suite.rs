@@ -347,8 +347,8 @@ fn box_runs(runs: &[(u64, u64)], set_back: bool) -> Vec<(String, u64, Outcome)> 
 /// 40° turns (the sector's edge towards the boundary, free each time, with
 /// what it had met ahead), back to the same seek and hit, until the
 /// simulator's budget ran out. After a whole circle the follower passes
-/// what blocks on its side (`follow::Follow::hug`); without that rule each
-/// of these times out (checked).
+/// what blocks on its side (`follow::Follow::hug`); with `note_turn` never
+/// counting a turn, each of these times out (checked).
 #[test]
 fn box_world_followers_leave_their_circles() {
     for (name, seed, outcome) in box_runs(&[(51, 1), (144, 1), (69, 4)], false) {
@@ -445,4 +445,14 @@ fn walled_in_goals_are_reported_after_a_shorter_second_round() {
 #[test]
 fn a_walled_in_goal_is_reported_within_the_first_rounds_budget() {
     assert_walled_reported(&[45]);
+}
+
+/// A walled world whose follower went round in a circle of nine 40° turns
+/// beside the ring (as in `box_world_followers_leave_their_circles`) until
+/// the simulator's budget ran out: with `note_turn` never counting a turn,
+/// it times out after 2,197 cycles (checked; with `CIRCLE_TURNS` at 255
+/// the rule still comes, after 255 turns in a row, and it is reported).
+#[test]
+fn a_walled_in_goal_is_reported_after_a_circle() {
+    assert_walled_reported(&[35]);
 }
