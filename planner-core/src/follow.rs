@@ -365,10 +365,11 @@ impl Follow {
     /// of them. Once the rover has gone round a whole circle of such turns
     /// (see [`Follow::note_turn`]), the first free past the first blocked
     /// one instead (past what blocks, the rover keeps it on its side):
-    /// with the boundary ahead and the sector's edge free, the edge turned
-    /// the rover away from what it had met and round in a circle of nine
-    /// 40° turns, back to the same seek and the same hit, until a budget
-    /// ran out (box-23 with seed 4: 491 cycles).
+    /// with what the beams see ahead or on the other side and the sector's
+    /// edge free, the edge turned the rover away from it, round a circle of
+    /// nine 40° turns, back to the same pose every nine cycles until a budget
+    /// ran out (box-69 with seed 4: from cycle 311 to the simulator's
+    /// budget at 587).
     pub fn hug(&self, cfg: &Config, free: impl Fn(Angle) -> u16) -> Option<(Angle, u16)> {
         let skip = self.turns_to_skip();
         // One pass, one call of `free` per turn and none past the answer.
