@@ -594,6 +594,43 @@ mod tests {
         assert_eq!(f.hug(&cfg, blocked_at(&[2])), Some((turns[0], way(0))));
     }
 
+    proptest::proptest! {
+        /// Against a plain model of the rule: before the circle, the
+        /// `skip`-th free turn from the boundary's side; after it, the
+        /// `skip`-th free past the first blocked one, else the `skip`-th
+        /// free of all.
+        #[test]
+        fn hug_is_the_plain_rule(
+            ways in proptest::array::uniform5(0u16..2 * FOLLOW_FREE_MM),
+            refusals in 0usize..6,
+            circled: bool,
+        ) {
+            let (cfg, mut f) = following();
+            for _ in 0..refusals {
+                f.after_step(false, true);
+            }
+            if circled {
+                for _ in 0..CIRCLE_TURNS {
+                    f.note_turn(&cfg, cfg.sector_half_width(), FOLLOW_STEP_MM);
+                }
+            }
+            let turns = f.turns(&cfg);
+            let way = |turn: Angle| ways[turns.iter().position(|&t| t == turn).unwrap()];
+            let skip = f.turns_to_skip();
+            let free: std::vec::Vec<usize> =
+                (0..SENSOR_COUNT).filter(|&i| ways[i] >= FOLLOW_FREE_MM).collect();
+            let first_blocked = (0..SENSOR_COUNT).find(|&i| ways[i] < FOLLOW_FREE_MM);
+            let past = first_blocked
+                .and_then(|b| free.iter().copied().filter(|&i| i > b).nth(skip));
+            let want = if circled {
+                past.or_else(|| free.get(skip).copied())
+            } else {
+                free.get(skip).copied()
+            };
+            proptest::prop_assert_eq!(f.hug(&cfg, way), want.map(|i| (turns[i], ways[i])));
+        }
+    }
+
     #[test]
     fn off_until_started() {
         let mut f = Follow::default();
