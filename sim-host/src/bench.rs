@@ -7,14 +7,16 @@ use crate::sim::{self, Outcome, SimConfig};
 use crate::svg;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::collections::HashMap;
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// One run's figures (also the `--json` line).
-#[derive(Clone, Debug, Serialize)]
+/// One run's figures (also the `--json` line, which [`load_rows`] reads
+/// back).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct Row {
     /// Scenario name.
     pub name: String,
@@ -341,6 +343,124 @@ pub fn comparison(rows: &[Row]) -> String {
     s
 }
 
+/// Read a `bench --json` file back: one [`Row`] per line (blank lines
+/// skipped). A line that is not a run is an error naming the file and line.
+pub fn load_rows(path: &Path) -> Result<Vec<Row>, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    text.lines()
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, l)| {
+            serde_json::from_str(l)
+                .map_err(|e| format!("{}:{}: not a bench run: {e}", path.display(), i + 1))
+        })
+        .collect()
+}
+
+/// Two benches of the same runs side by side, run by run: `before` and
+/// `after` are their rows (two builds of a planner, or two settings), paired
+/// by planner, scenario name and seed (not by path, so that two checkouts'
+/// runs pair). Prints both totals over the paired runs, the mean path ratio
+/// over the runs both reached, how many outcomes changed and which way,
+/// and with `list_runs` each changed run.
+///
+/// Why: a change's totals hide runs that moved both ways (13 reached runs
+/// becoming timeouts behind 10 timeouts becoming reached), and a few runs
+/// moving is within what another seed would move (docs/bench.md, "The
+/// flank margin and the stuck window, swept").
+pub fn compare(before: &[Row], after: &[Row], list_runs: bool) -> Result<String, String> {
+    type Key<'a> = (&'a str, &'a str, u64);
+    fn index<'a>(rows: &'a [Row], which: &str) -> Result<BTreeMap<Key<'a>, &'a Row>, String> {
+        let mut map = BTreeMap::new();
+        for r in rows {
+            if map
+                .insert((r.planner.as_str(), r.name.as_str(), r.seed), r)
+                .is_some()
+            {
+                return Err(format!(
+                    "{which}: {} with seed {} ({}) appears twice; compare benches of one set each",
+                    r.name, r.seed, r.planner
+                ));
+            }
+        }
+        Ok(map)
+    }
+    let a = index(before, "before")?;
+    let b = index(after, "after")?;
+    let paired: Vec<(&Row, &Row)> = a
+        .iter()
+        .filter_map(|(k, ra)| b.get(k).map(|rb| (*ra, *rb)))
+        .collect();
+    if paired.is_empty() {
+        return Err("no run (planner, scenario, seed) is in both files".into());
+    }
+    let (pa, pb): (Vec<Row>, Vec<Row>) = paired
+        .iter()
+        .map(|(x, y)| ((*x).clone(), (*y).clone()))
+        .unzip();
+    let mut s = String::new();
+    let _ = write!(s, "before: {}", table(&pa, true));
+    let _ = write!(s, "after:  {}", table(&pb, true));
+    let both: Vec<(f64, f64)> = paired
+        .iter()
+        .filter_map(|(x, y)| Some((x.ratio()?, y.ratio()?)))
+        .collect();
+    if !both.is_empty() {
+        let n = both.len() as f64;
+        let _ = writeln!(
+            s,
+            "mean path ratio where both reached ({} runs): {:.3} -> {:.3}",
+            both.len(),
+            both.iter().map(|p| p.0).sum::<f64>() / n,
+            both.iter().map(|p| p.1).sum::<f64>() / n
+        );
+    }
+    let changed: Vec<&(&Row, &Row)> = paired
+        .iter()
+        .filter(|(x, y)| x.outcome != y.outcome)
+        .collect();
+    let _ = writeln!(
+        s,
+        "outcomes changed: {} of {} runs",
+        changed.len(),
+        paired.len()
+    );
+    let mut moves: BTreeMap<(Outcome, Outcome), usize> = BTreeMap::new();
+    for (x, y) in &changed {
+        *moves.entry((x.outcome, y.outcome)).or_default() += 1;
+    }
+    let mut moves: Vec<_> = moves.into_iter().collect();
+    moves.sort_by(|p, q| q.1.cmp(&p.1).then(p.0.cmp(&q.0)));
+    for ((from, to), n) in moves {
+        let _ = writeln!(s, "  {} -> {}: {n}", from.as_str(), to.as_str());
+    }
+    if list_runs {
+        for (x, y) in &changed {
+            let _ = writeln!(
+                s,
+                "  {} seed {} ({}): {} ({:.1} m) -> {} ({:.1} m)",
+                x.name,
+                x.seed,
+                x.planner,
+                x.outcome.as_str(),
+                x.path_length,
+                y.outcome.as_str(),
+                y.path_length
+            );
+        }
+    }
+    let unpaired = (a.len() - paired.len()) + (b.len() - paired.len());
+    if unpaired > 0 {
+        let _ = writeln!(
+            s,
+            "not compared: {} runs only before, {} only after",
+            a.len() - paired.len(),
+            b.len() - paired.len()
+        );
+    }
+    Ok(s)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -385,5 +505,103 @@ mod tests {
             lines[3],
             "| b | 3 | 2/3 | 0 | 0 (0/0) | 1 | 1.350 | 1/2 | 1.350 (2 runs) |"
         );
+    }
+
+    /// Runs pair by planner, scenario and seed, not by path (two
+    /// checkouts' files); the moves are counted each way, the runs only one
+    /// side has are left out of both totals, and the ratio where both
+    /// reached is over the same runs.
+    #[test]
+    fn compare_pairs_runs_and_counts_each_move() {
+        let mut before = vec![
+            row("a", "w1", 1, Outcome::Reached, 1.5),
+            row("a", "w1", 2, Outcome::Reached, 2.0),
+            row("a", "w2", 1, Outcome::Timeout, 9.0),
+            row("a", "w3", 1, Outcome::Reached, 1.0),
+            row("a", "only-before", 1, Outcome::Reached, 1.0),
+        ];
+        for r in &mut before {
+            r.file = format!("/one/checkout/{}.toml", r.name).into();
+        }
+        let after = vec![
+            row("a", "w1", 1, Outcome::Reached, 1.1),
+            row("a", "w1", 2, Outcome::Timeout, 9.0),
+            row("a", "w2", 1, Outcome::Reached, 3.0),
+            row("a", "w3", 1, Outcome::Collision, 0.5),
+        ];
+        let text = compare(&before, &after, true).unwrap();
+        let lines: Vec<&str> = text.lines().collect();
+        assert!(
+            lines[0].starts_with("before: runs 4 | reached 3/4"),
+            "{text}"
+        );
+        assert!(
+            lines[1].starts_with("after:  runs 4 | reached 2/4"),
+            "{text}"
+        );
+        assert_eq!(
+            lines[2],
+            "mean path ratio where both reached (1 runs): 1.500 -> 1.100"
+        );
+        assert_eq!(lines[3], "outcomes changed: 3 of 4 runs");
+        // Each move once: in the order of the outcomes (reached first).
+        assert_eq!(lines[4], "  reached -> collision: 1");
+        assert_eq!(lines[5], "  reached -> timeout: 1");
+        assert_eq!(lines[6], "  timeout -> reached: 1");
+        assert_eq!(
+            lines[7],
+            "  w1 seed 2 (a): reached (2.0 m) -> timeout (9.0 m)"
+        );
+        assert_eq!(lines[10], "not compared: 1 runs only before, 0 only after");
+        assert_eq!(lines.len(), 11, "{text}");
+        // Without the list, the same totals and moves.
+        let short = compare(&before, &after, false).unwrap();
+        assert_eq!(short.lines().count(), 8, "{short}");
+    }
+
+    #[test]
+    fn compare_refuses_what_it_cannot_pair() {
+        let one = [row("a", "w1", 1, Outcome::Reached, 1.0)];
+        let other = [row("b", "w1", 1, Outcome::Reached, 1.0)];
+        let e = compare(&one, &other, false).unwrap_err();
+        assert!(e.contains("no run"), "{e}");
+        let twice = [one[0].clone(), one[0].clone()];
+        let e = compare(&twice, &one, false).unwrap_err();
+        assert!(
+            e.contains("before: w1 with seed 1 (a) appears twice"),
+            "{e}"
+        );
+    }
+
+    /// What `bench --json` writes, `load_rows` reads back as the same rows.
+    #[test]
+    fn bench_json_lines_load_back() {
+        let rows = [
+            row("eapf", "w1", 3, Outcome::Unreachable, 4.25),
+            Row {
+                reference_length: None,
+                ..row("route", "w2", 1, Outcome::Timeout, 7.0)
+            },
+        ];
+        let dir = std::env::temp_dir().join(format!("sim-host-load-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let file = dir.join("runs.jsonl");
+        let text: Vec<String> = rows
+            .iter()
+            .map(|r| serde_json::to_string(r).unwrap())
+            .collect();
+        std::fs::write(&file, text.join("\n") + "\n\n").unwrap();
+        let back = load_rows(&file).unwrap();
+        assert_eq!(back.len(), 2);
+        for (a, b) in rows.iter().zip(&back) {
+            assert_eq!(
+                serde_json::to_string(a).unwrap(),
+                serde_json::to_string(b).unwrap()
+            );
+        }
+        std::fs::write(&file, "{\"name\": \"w1\"}\n").unwrap();
+        let e = load_rows(&file).unwrap_err();
+        assert!(e.contains("runs.jsonl:1: not a bench run"), "{e}");
+        std::fs::remove_dir_all(&dir).ok();
     }
 }

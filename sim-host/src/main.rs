@@ -86,6 +86,18 @@ enum Cmd {
         #[arg(long)]
         set_back: bool,
     },
+    /// Two `bench --json` files of the same runs (two builds or settings),
+    /// run by run: both totals over the runs in both, and which outcomes
+    /// changed which way.
+    Compare {
+        /// The `--json` file of the first bench.
+        before: PathBuf,
+        /// The `--json` file of the second.
+        after: PathBuf,
+        /// Also list every run whose outcome changed.
+        #[arg(long)]
+        runs: bool,
+    },
     /// Write a random world in the paper's environment 2 arena: circles
     /// with its parameters, or turned boxes and walls, walled in or not
     /// (`--kind`).
@@ -321,6 +333,15 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 write(&out, &(lines.join("\n") + "\n"))?;
             }
             Ok(())
+        }
+        Cmd::Compare {
+            before,
+            after,
+            runs,
+        } => {
+            let a = bench::load_rows(&before)?;
+            let b = bench::load_rows(&after)?;
+            say(&bench::compare(&a, &b, runs)?)
         }
         Cmd::Gen {
             out,

@@ -431,3 +431,51 @@ fn set_back_sensors_are_said_and_drive_another_way() {
         "{err}"
     );
 }
+
+#[test]
+fn compare_reads_two_benches_run_by_run() {
+    let (dir, before) = scratch("compare");
+    let after = dir.join("after.jsonl");
+    for (seed, json) in [("1", &before), ("1", &after)] {
+        sim_host(
+            &[
+                "bench",
+                "--summary",
+                "--seed",
+                seed,
+                "--seeds",
+                "2",
+                "--json",
+            ],
+            &[json, &corridor()],
+        );
+    }
+    // The same build twice: the same runs, nothing moved.
+    let text = sim_host(&["compare", "--runs"], &[&before, &after]);
+    let lines: Vec<&str> = text.lines().collect();
+    assert!(lines[0].starts_with("before: runs 2 |"), "{text}");
+    assert!(lines[1].starts_with("after:  runs 2 |"), "{text}");
+    assert!(lines.contains(&"outcomes changed: 0 of 2 runs"), "{text}");
+    // One run's outcome edited: it is listed, with the way it moved.
+    let edited = std::fs::read_to_string(&after).unwrap().replacen(
+        "\"outcome\":\"reached\"",
+        "\"outcome\":\"timeout\"",
+        1,
+    );
+    std::fs::write(&after, edited).unwrap();
+    let text = sim_host(&["compare", "--runs"], &[&before, &after]);
+    assert!(text.contains("outcomes changed: 1 of 2 runs"), "{text}");
+    assert!(text.contains("  reached -> timeout: 1\n"), "{text}");
+    assert!(text.contains("corridor seed 1 (eapf): reached ("), "{text}");
+    // A file that is not a bench's: a clear error, exit code 2.
+    std::fs::write(&after, "not json\n").unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .arg("compare")
+        .args([&before, &after])
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("after.jsonl:1: not a bench run"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}
