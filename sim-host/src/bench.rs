@@ -8,8 +8,7 @@ use crate::svg;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
 use serde::{Deserialize, Serialize};
-use std::collections::BTreeMap;
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::fmt::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
@@ -401,18 +400,18 @@ pub fn compare(before: &[Row], after: &[Row], list_runs: bool) -> Result<String,
     let mut s = String::new();
     let _ = write!(s, "before: {}", table(&pa, true));
     let _ = write!(s, "after:  {}", table(&pb, true));
-    let both: Vec<(f64, f64)> = paired
+    // The runs both reached, each side's mean ratio over them by `totals`.
+    let (ba, bb): (Vec<Row>, Vec<Row>) = pa
         .iter()
-        .filter_map(|(x, y)| Some((x.ratio()?, y.ratio()?)))
-        .collect();
-    if !both.is_empty() {
-        let n = both.len() as f64;
+        .zip(&pb)
+        .filter(|(x, y)| x.ratio().is_some() && y.ratio().is_some())
+        .map(|(x, y)| (x.clone(), y.clone()))
+        .unzip();
+    if let (Some(ra), Some(rb)) = (totals(&ba).mean_ratio, totals(&bb).mean_ratio) {
         let _ = writeln!(
             s,
-            "mean path ratio where both reached ({} runs): {:.3} -> {:.3}",
-            both.len(),
-            both.iter().map(|p| p.0).sum::<f64>() / n,
-            both.iter().map(|p| p.1).sum::<f64>() / n
+            "mean path ratio where both reached ({} runs): {ra:.3} -> {rb:.3}",
+            ba.len()
         );
     }
     let changed: Vec<&(&Row, &Row)> = paired
@@ -449,13 +448,11 @@ pub fn compare(before: &[Row], after: &[Row], list_runs: bool) -> Result<String,
             );
         }
     }
-    let unpaired = (a.len() - paired.len()) + (b.len() - paired.len());
-    if unpaired > 0 {
+    let (only_a, only_b) = (a.len() - paired.len(), b.len() - paired.len());
+    if only_a + only_b > 0 {
         let _ = writeln!(
             s,
-            "not compared: {} runs only before, {} only after",
-            a.len() - paired.len(),
-            b.len() - paired.len()
+            "not compared: {only_a} runs only before, {only_b} only after"
         );
     }
     Ok(s)
