@@ -280,7 +280,37 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
         t.within_125,
         t.reached
     );
+    if let Some(split) = escape_split(rows) {
+        // On the totals line, so that one line per seed still holds them.
+        s.pop();
+        let _ = writeln!(s, " | {split}");
+    }
     s
+}
+
+/// The mean path ratio split by whether the run dropped virtual obstacles:
+/// the field's own paths against those with an escape's detours, which is
+/// where a planner's mean ratio is lost or won (docs/bench.md, "Where the
+/// path ratio goes"). `None` where no reached run dropped any (a planner
+/// without the escape; the line's ratio is already the field's own).
+pub fn escape_split(rows: &[Row]) -> Option<String> {
+    let part = |escaped: bool| {
+        let these: Vec<Row> = rows
+            .iter()
+            .filter(|r| (r.virtual_obstacles > 0) == escaped)
+            .cloned()
+            .collect();
+        totals(&these)
+    };
+    let (with, without) = (part(true), part(false));
+    let with_ratio = with.mean_ratio?;
+    let without_ratio = without
+        .mean_ratio
+        .map_or_else(|| "–".into(), |r| format!("{r:.3}"));
+    Some(format!(
+        "ratio without virtual obstacles {without_ratio} ({}/{} within 1.25x), with them {with_ratio:.3} ({}/{})",
+        without.within_125, without.reached, with.within_125, with.reached
+    ))
 }
 
 /// The planners side by side: one row of [`totals`] per planner, in the
@@ -501,6 +531,28 @@ mod tests {
         assert_eq!(
             lines[3],
             "| b | 3 | 2/3 | 0 | 0 (0/0) | 1 | 1.350 | 1/2 | 1.350 (2 runs) |"
+        );
+    }
+
+    /// The totals line splits the ratio by the escape where some reached
+    /// run dropped virtual obstacles (not the timeout's), and leaves it
+    /// out where none did.
+    #[test]
+    fn the_totals_split_the_ratio_by_the_escape() {
+        let mut rows = vec![
+            row("a", "w1", 1, Outcome::Reached, 1.0),
+            row("a", "w2", 1, Outcome::Reached, 1.4),
+            row("a", "w3", 1, Outcome::Reached, 2.0),
+            row("a", "w4", 1, Outcome::Timeout, 9.0),
+        ];
+        assert!(!table(&rows, true).contains("virtual obstacles"));
+        rows[2].virtual_obstacles = 3;
+        rows[3].virtual_obstacles = 5;
+        assert_eq!(
+            table(&rows, true),
+            "runs 4 | reached 3/4 solvable (75.0%) | collisions 0 | unreachable 0 (0 of 0 unsolvable) \
+             | timeouts 1 | mean path ratio 1.467 | within 1.25x 1/3 | ratio without virtual obstacles \
+             1.200 (1/2 within 1.25x), with them 2.000 (0/1)\n"
         );
     }
 
