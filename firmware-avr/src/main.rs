@@ -26,10 +26,10 @@ mod stack;
 
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::protocol::{self, Request};
+use planner_core::protocol::{self, Request, SensorField};
 use planner_core::{Angle, Config, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status};
 use serial::Serial;
-use ufmt::uwriteln;
+use ufmt::{uwrite, uwriteln};
 
 /// How often the guard checks the way ahead during an advance, ms.
 const GUARD_PERIOD_MS: u32 = 4;
@@ -189,6 +189,25 @@ fn main() -> ! {
                 }
                 Some(Request::Memory) => {
                     let _ = uwriteln!(out, "M stack_peak={}", stack::peak() as u32);
+                    continue;
+                }
+                Some(Request::Sensors) => {
+                    // The counts, then what the planner reads from each.
+                    let raw = adc::latest();
+                    serial::write(b'D');
+                    for c in raw {
+                        let _ = uwrite!(out, " {}", c as u32);
+                    }
+                    for f in protocol::sensor_readings(planner.config(), &raw) {
+                        serial::write(b' ');
+                        match f {
+                            SensorField::Number(n) => {
+                                let _ = uwrite!(out, "{}", n as u32);
+                            }
+                            SensorField::Sign(c) => serial::write(c),
+                        }
+                    }
+                    serial::write(b'\n');
                     continue;
                 }
                 Some(Request::Replay(x, y)) if !driving => {

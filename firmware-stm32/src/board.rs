@@ -24,7 +24,7 @@ use defmt_rtt as _;
 use micromath::F32Ext;
 use panic_probe as _;
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::protocol::{self, Request};
+use planner_core::protocol::{self, Request, SensorField};
 use planner_core::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
 use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
@@ -107,6 +107,8 @@ pub fn run() -> ! {
     let mut lines = protocol::LineReader::new();
     let mut ms: u32 = 0;
     let mut warm = false;
+    // The counts of the last tick (`None` after an ADC error), for `D`.
+    let mut last_raw = None;
     defmt::info!("ready");
     let _ = tx.write_str("READY\n");
 
@@ -135,6 +137,26 @@ pub fn run() -> ! {
                     driving = false;
                     "OK\n"
                 }
+                // The counts, then what the planner reads from each.
+                Some(Request::Sensors) => match last_raw {
+                    Some(raw) => {
+                        let _ = tx.write_char('D');
+                        for c in raw {
+                            write_number(&mut tx, c);
+                        }
+                        for f in protocol::sensor_readings(planner.config(), &raw) {
+                            match f {
+                                SensorField::Number(n) => write_number(&mut tx, n),
+                                SensorField::Sign(c) => {
+                                    let _ = tx.write_char(' ');
+                                    let _ = tx.write_char(c as char);
+                                }
+                            }
+                        }
+                        "\n"
+                    }
+                    None => "ERR\n",
+                },
                 _ => "ERR\n",
             };
             let _ = tx.write_str(reply);
@@ -154,12 +176,15 @@ pub fn run() -> ! {
         // No step before the sensors' first output (kept once past: `ms`
         // wraps after 49 days).
         warm = warm || ms >= SENSOR_WARMUP_MS;
+        // Every tick, driving or not: `D` prints the last counts.
+        let read = sensors.read_raw();
+        last_raw = read.as_ref().ok().copied();
         if !driving || !warm {
             drive(Wheels::STOP);
             continue;
         }
         let pose = odometry.pose();
-        let Ok(raw) = sensors.read_raw() else {
+        let Ok(raw) = read else {
             // An ADC error is a sensor fault: stop.
             driving = false;
             drive(Wheels::STOP);
@@ -191,5 +216,24 @@ pub fn run() -> ! {
             planner.guard_raw(&raw, remaining)
         });
         drive(wheels);
+    }
+}
+
+/// A space and `v` in decimal: without `core::fmt`'s integer formatting
+/// (kilobytes of flash).
+fn write_number(tx: &mut impl core::fmt::Write, v: u16) {
+    let mut p: u16 = 1;
+    while p <= v / 10 {
+        p *= 10;
+    }
+    let _ = tx.write_char(' ');
+    let mut rest = v;
+    loop {
+        let _ = tx.write_char((b'0' + (rest / p) as u8) as char);
+        rest %= p;
+        if p == 1 {
+            break;
+        }
+        p /= 10;
     }
 }

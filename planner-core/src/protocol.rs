@@ -8,6 +8,16 @@
 //! | `S` | stop now (motors off) | `OK` |
 //! | `M` | report memory | `M stack_peak=<bytes>` |
 //! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below | `OK` |
+//! | `D` | the sensors now: their raw counts, and what the planner reads from them | `D <c0> … <c4> <r0> … <r4>` |
+//!
+//! `D` is for bringing a rover up: the five sensors in the pin map's order
+//! (−40° to +40°), first the ADC counts, then each count as the planner's
+//! calibration reads it: a distance from the sensor face in mm, `-` for
+//! nothing in range, `<` for nearer than the calibration trusts (an
+//! obstacle at the face, for the planner), `!` for a count no working
+//! sensor gives (a fault: an unplugged sensor reads `0 … !`). Hold a
+//! target in front of each sensor in turn to check the wiring and the
+//! calibration; the line is the same on both firmwares ([`sensor_readings`]).
 //!
 //! Anything else gets `ERR`. Telemetry (the AVR's; the STM32 logs over
 //! defmt instead), one line per planner step:
@@ -31,6 +41,9 @@
 //! control tick are off during replay, and the firmware runs each guard
 //! look and step with interrupts off, so that their cycles are theirs alone.
 
+use crate::config::Config;
+use crate::sensors::{RawCounts, Reading};
+
 /// One parsed command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -45,6 +58,8 @@ pub enum Request {
     Memory,
     /// `R x y`: replay mode toward (x, y) mm.
     Replay(i16, i16),
+    /// `D`: the sensors' counts and readings now.
+    Sensors,
 }
 
 fn parse_i16(field: &[u8]) -> Option<i16> {
@@ -80,6 +95,7 @@ pub fn parse(line: &[u8]) -> Option<Request> {
         b"S" => Request::Stop,
         b"M" => Request::Memory,
         b"R" => Request::Replay(num()?, num()?),
+        b"D" => Request::Sensors,
         _ => return None,
     };
     match f.next() {
@@ -90,6 +106,34 @@ pub fn parse(line: &[u8]) -> Option<Request> {
 
 /// Longest command line, bytes.
 pub const LINE_CAPACITY: usize = 32;
+
+/// What the reply to `D` says of one sensor's count, after the counts.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SensorField {
+    /// A distance from the sensor face, mm.
+    Number(u16),
+    /// A reading that is no distance: `-`, `<` or `!` (see the table above).
+    Sign(u8),
+}
+
+/// What the calibration reads from each of the counts `raw`, as the reply
+/// to `D` says it (see the table above). The firmwares write `D`, the five
+/// counts and these, each after a space, and `\n`, with the number
+/// formatting they already have (ufmt on the AVR): the line is the same on
+/// both without a formatter of its own in the image.
+pub fn sensor_readings<'a>(
+    cfg: &'a Config,
+    raw: &'a RawCounts,
+) -> impl Iterator<Item = SensorField> + 'a {
+    raw.iter()
+        .zip(cfg.calibration.iter())
+        .map(|(&c, cal)| match cal.reading(c) {
+            Reading::Range(mm) => SensorField::Number(mm),
+            Reading::Clear => SensorField::Sign(b'-'),
+            Reading::TooClose => SensorField::Sign(b'<'),
+            Reading::Implausible => SensorField::Sign(b'!'),
+        })
+}
 
 /// Gathers received bytes into lines and parses each.
 #[derive(Clone, Debug, Default)]
@@ -135,6 +179,51 @@ mod tests {
         assert_eq!(parse(b"S"), Some(Request::Stop));
         assert_eq!(parse(b"M"), Some(Request::Memory));
         assert_eq!(parse(b"R  10   20"), Some(Request::Replay(10, 20)));
+        assert_eq!(parse(b"D"), Some(Request::Sensors));
+    }
+
+    /// `D`'s line: the counts in order, then each reading's token, from
+    /// the calibration of each sensor.
+    #[test]
+    fn the_sensor_line_says_counts_then_readings() {
+        use crate::config::ConfigBuilder;
+        use crate::sensors::AdcProfile;
+        let adc = AdcProfile::AVR_10BIT_5V;
+        let cfg = ConfigBuilder::new(adc).build().unwrap();
+        let cal = cfg.calibration(0).unwrap();
+        let (far, near) = cal.window();
+        let mid = (far + near) / 2;
+        let Reading::Range(mm) = cal.reading(mid) else {
+            panic!("{mid} is in the window ({far}, {near})")
+        };
+        assert!((100..=800).contains(&mm), "{mm} mm at count {mid}");
+        let raw = [0, far - 1, mid, near + 1, adc.full_scale() + 1];
+        let want = format!(
+            "D 0 {} {mid} {} {} ! - {mm} < !\n",
+            far - 1,
+            near + 1,
+            adc.full_scale() + 1
+        );
+        assert_eq!(line(&cfg, &raw), want);
+        assert_eq!(
+            line(&cfg, &[u16::MAX; 5]),
+            "D 65535 65535 65535 65535 65535 ! ! ! ! !\n"
+        );
+    }
+
+    /// The line as the firmwares write it.
+    fn line(cfg: &Config, raw: &RawCounts) -> std::string::String {
+        let mut s = std::string::String::from("D");
+        for c in raw {
+            s += &format!(" {c}");
+        }
+        for f in sensor_readings(cfg, raw) {
+            match f {
+                SensorField::Number(n) => s += &format!(" {n}"),
+                SensorField::Sign(c) => s += &format!(" {}", c as char),
+            }
+        }
+        s + "\n"
     }
 
     #[test]
@@ -173,6 +262,7 @@ mod tests {
             b"X",
             b"G - 2",
             b"P 1 2",
+            b"D 1",
         ] {
             assert_eq!(parse(bad), None, "{:?}", core::str::from_utf8(bad));
         }

@@ -1,9 +1,42 @@
 //! The ATmega328P firmware's serial protocol (`planner_core::protocol`) as
 //! a user meets it in simavr: bad lines get `ERR`, never a reset; a goal
 //! starts the drive and its telemetry; the pose cannot be set while
-//! driving; `S` stops the motors.
+//! driving; `S` stops the motors; `D` reports the sensors as the host's
+//! core reads them.
 
+use planner_core::protocol::{sensor_readings, SensorField};
+use planner_core::{AdcProfile, ConfigBuilder, RawCounts};
 use rover_tests::avr::{wheels_for_1ms, Avr};
+
+/// The `D` line the host's core writes for `raw` with the AVR's default
+/// configuration.
+fn host_sensor_line(raw: &RawCounts) -> String {
+    let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap();
+    let mut line = String::from("D");
+    for c in raw {
+        line += &format!(" {c}");
+    }
+    for f in sensor_readings(&cfg, raw) {
+        match f {
+            SensorField::Number(n) => line += &format!(" {n}"),
+            SensorField::Sign(c) => line += &format!(" {}", c as char),
+        }
+    }
+    line
+}
+
+/// The counts of a `D` line.
+fn counts(line: &str) -> RawCounts {
+    let f: Vec<u16> = line
+        .split_whitespace()
+        .skip(1)
+        .take(5)
+        .map(|c| c.parse().unwrap())
+        .collect();
+    f.try_into().unwrap()
+}
 
 /// The reply to `line`, past the telemetry lines (`T …`) of a drive.
 fn reply(a: &mut Avr, line: &str) -> Option<String> {
@@ -31,17 +64,32 @@ fn the_serial_protocol_as_a_user_meets_it() {
     ] {
         assert_eq!(reply(&mut a, bad).as_deref(), Some("ERR"), "{bad:?}");
     }
+    // Nothing on the sensor pins yet: five faults.
+    assert_eq!(reply(&mut a, "D").as_deref(), Some("D 0 0 0 0 0 ! ! ! ! !"));
     // Each sensor at its phantom level, nothing in range (0.28 V of 5 V:
-    // simavr's ADC reference is 3.3 V, hence the scaling).
+    // simavr's ADC reference is 3.3 V, hence the scaling), but the middle
+    // one at 1.0 V, an obstacle about 30 cm from its face.
+    let scaled = |mv: u32| mv * 3_300 / 5_000;
     {
-        let mv = 280 * 3_300 / 5_000;
         let mut pins = a.avr.pins();
-        pins.adc0().set_mv(mv);
-        pins.adc1().set_mv(mv);
-        pins.adc2().set_mv(mv);
-        pins.adc3().set_mv(mv);
-        pins.adc4().set_mv(mv);
+        pins.adc0().set_mv(scaled(280));
+        pins.adc1().set_mv(scaled(280));
+        pins.adc2().set_mv(scaled(1_000));
+        pins.adc3().set_mv(scaled(280));
+        pins.adc4().set_mv(scaled(280));
     }
+    a.run_us(5_000);
+    let d = reply(&mut a, "D").unwrap();
+    assert_eq!(d, host_sensor_line(&counts(&d)), "as the host reads them");
+    let f: Vec<&str> = d.split_whitespace().collect();
+    assert_eq!((f[6], f[7], f[9], f[10]), ("-", "-", "-", "-"), "{d}");
+    let mm: u16 = f[8].parse().unwrap_or_else(|_| panic!("a distance: {d}"));
+    assert!((220..=320).contains(&mm), "{d}");
+    {
+        let mut pins = a.avr.pins();
+        pins.adc2().set_mv(scaled(280));
+    }
+    a.run_us(5_000);
     assert_eq!(reply(&mut a, "P 100 200 0").as_deref(), Some("OK"));
     assert_eq!(reply(&mut a, "G 3000 200").as_deref(), Some("OK"));
     // The first step's telemetry: moving, straight on (heading 0), a step.
