@@ -6,8 +6,8 @@
 //! | `G <x_mm> <y_mm>` | new goal; forget the map; start driving | `OK` |
 //! | `P <x_mm> <y_mm> <heading_deg>` | set the odometry pose (when stopped) | `OK` |
 //! | `S` | stop now (motors off) | `OK` |
-//! | `M` | report memory | `M stack_peak=<bytes>` |
-//! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below | `OK` |
+//! | `M` | report memory (the AVR; the STM32 answers `ERR`) | `M stack_peak=<bytes>` |
+//! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below (the AVR; the STM32's emulated build replays a trace built in) | `OK` |
 //! | `D` | the sensors now: their raw counts, and what the planner reads from them | `D <c0> … <c4> <r0> … <r4>` |
 //!
 //! `D` is for bringing a rover up: the five sensors in the pin map's order
