@@ -7,6 +7,7 @@
 //! pin voltages, pin levels, UART, exact cycle counts.
 
 pub mod avr;
+pub mod flash;
 pub mod profile;
 pub mod stack_bound;
 pub mod stm32;

@@ -444,25 +444,35 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
 /// The ELF's function symbols, demangled, by address.
 struct Symbols(Vec<(u32, u32, String)>);
 
+/// The code symbols (`t`, `T`) of an AVR ELF: (address, size, demangled
+/// name without its hash), sorted by address, from `avr-nm`.
+pub fn text_symbols(elf: &std::path::Path) -> Vec<(u32, u32, String)> {
+    let out = Command::new("avr-nm")
+        .args(["-S", "--defined-only"])
+        .arg(elf)
+        .output()
+        .expect("avr-nm (Debian binutils-avr)");
+    let mut v: Vec<(u32, u32, String)> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .filter_map(|l| {
+            let mut f = l.splitn(4, ' ');
+            let a = u32::from_str_radix(f.next()?, 16).ok()?;
+            let size = u32::from_str_radix(f.next()?, 16).ok()?;
+            let kind = f.next()?;
+            let name = format!("{:#}", rustc_demangle::demangle(f.next()?));
+            (kind == "t" || kind == "T").then_some((a, size, name))
+        })
+        .collect();
+    v.sort();
+    v
+}
+
 impl Symbols {
     fn of(elf: &std::path::Path) -> Symbols {
-        let out = Command::new("avr-nm")
-            .args(["-S", "--defined-only"])
-            .arg(elf)
-            .output()
-            .expect("avr-nm (Debian binutils-avr)");
-        let mut v: Vec<(u32, u32, String)> = String::from_utf8_lossy(&out.stdout)
-            .lines()
-            .filter_map(|l| {
-                let mut f = l.splitn(4, ' ');
-                let a = u32::from_str_radix(f.next()?, 16).ok()?;
-                let size = u32::from_str_radix(f.next()?, 16).ok()?;
-                let kind = f.next()?;
-                let name = short(&format!("{:#}", rustc_demangle::demangle(f.next()?)));
-                (kind == "t" || kind == "T").then_some((a, size, name))
-            })
+        let v = text_symbols(elf)
+            .into_iter()
+            .map(|(a, size, name)| (a, size, short(&name)))
             .collect();
-        v.sort();
         Symbols(v)
     }
 

@@ -135,6 +135,26 @@ fn flash_within_budget() {
     assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
 }
 
+/// `cargo xtask avr-size`'s parts account for the image: every code symbol
+/// is in one, and what no symbol's size covers (the vector table, the
+/// start-up's alignment) is small. The planner's share is printed: its
+/// functions and its inlined step alone are over the 16 KiB budget.
+#[test]
+fn flash_parts_cover_the_image() {
+    let elf = firmware_elf();
+    let (text, _, _) = elf_size(&elf);
+    let parts = rover_tests::flash::parts(&rover_tests::profile::text_symbols(&elf));
+    let counted: u32 = parts.iter().map(|p| p.1).sum();
+    let planner = parts[0].1 + parts[1].1;
+    println!("avr flash: {planner} of the {text} bytes of text are the planner's functions and its inlined step");
+    assert!(counted <= text, "{counted} counted of {text}");
+    assert!(
+        text - counted <= 256,
+        "{} bytes in no part: {parts:?}",
+        text - counted
+    );
+}
+
 /// Flash an Uno can take: its 32 KB less the 512 bytes at the top that
 /// its Optiboot bootloader holds (the Arduino IDE's `upload.maximum_size`
 /// for the board, 32,256 bytes). The image is what ravedude writes through

@@ -281,10 +281,11 @@ fn main() {
         "avr-report" => report("avr-report"),
         "stm32-report" => report("stm32-report"),
         "avr-profile" => report("avr-profile"),
+        "avr-size" => report("avr-size"),
         "stm32-profile" => report("stm32-profile"),
         _ => {
             eprintln!(
-                "usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile|stm32-profile>"
+                "usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
             );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
@@ -293,6 +294,9 @@ fn main() {
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
+            eprintln!(
+                "  avr-size      where firmware-avr's flash goes, by part (--set-back: that build)"
+            );
             eprintln!("  stm32-profile where firmware-stm32's step spends its instructions (QEMU; --set-back: the build for sensors set back)");
             exit(2);
         }

@@ -1,0 +1,100 @@
+//! Where the AVR image's flash goes (`cargo xtask avr-size`): the image's
+//! code symbols ([`crate::profile::text_symbols`]) summed by part, so that
+//! the flash budget's miss can be read by what fills the image: the
+//! planner's own functions and its step (inlined into the firmware's timed
+//! span) against the firmware's drivers, formatting and runtime.
+
+/// The parts, in the order [`parts`] gives them.
+pub const PARTS: [&str; 9] = [
+    "planner-core's functions",
+    "the planner step, inlined into firmware_avr::timed_step",
+    "the firmware's main loop (executor, odometry, protocol, telemetry inlined)",
+    "the configuration, in program memory",
+    "the firmware's drivers and replay mode",
+    "ufmt (telemetry text)",
+    "interrupt handlers",
+    "libgcc, avr-libc and the firmware's assembly (multiply, division, start-up)",
+    "core and heapless",
+];
+
+/// The part a code symbol (demangled, generic arguments kept) belongs to:
+/// one of [`PARTS`]. A generic function of `core` or `heapless` made for
+/// the planner's types counts as the planner's (it is there because of it).
+pub fn part_of(name: &str) -> &'static str {
+    let i = if name == "firmware_avr::timed_step" {
+        1
+    } else if name.starts_with("firmware_avr::__avr_device_rt_main") {
+        2
+    } else if name.contains("progmem::CONFIG") {
+        3
+    } else if name.starts_with("__vector") {
+        6
+    } else if name.contains("planner_core") {
+        0
+    } else if name.contains("ufmt") {
+        5
+    } else if name.contains("firmware_avr") {
+        4
+    } else if name.starts_with("__") || name.starts_with("mem") {
+        7
+    } else {
+        8
+    };
+    PARTS[i]
+}
+
+/// Bytes per part of `symbols` ((address, size, name) as
+/// [`crate::profile::text_symbols`] gives them), in [`PARTS`] order.
+pub fn parts(symbols: &[(u32, u32, String)]) -> Vec<(&'static str, u32)> {
+    PARTS
+        .iter()
+        .map(|&p| {
+            let bytes = symbols
+                .iter()
+                .filter(|(_, _, name)| part_of(name) == p)
+                .map(|&(_, size, _)| size)
+                .sum();
+            (p, bytes)
+        })
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn symbols_go_to_their_parts() {
+        let cases = [
+            ("firmware_avr::timed_step", 1),
+            ("firmware_avr::__avr_device_rt_main", 2),
+            ("firmware_avr::progmem::CONFIG::VALUE", 3),
+            ("__vector_21", 6),
+            ("<planner_core::escape::Escape>::force", 0),
+            (
+                "<core::array::iter::IntoIter<&planner_core::sensors::Reading, 3> as core::iter::traits::iterator::Iterator>::position::<planner_core::follow::side_of::{closure#0}>",
+                0,
+            ),
+            (
+                "<i32 as ufmt::uDebug>::fmt::<firmware_avr::serial::Serial>",
+                5,
+            ),
+            ("firmware_avr::motors::set", 4),
+            ("__mulsi3", 7),
+            ("memcpy", 7),
+            ("<core::ops::index_range::IndexRange as core::iter::traits::iterator::Iterator>::next", 8),
+        ];
+        for (name, part) in cases {
+            assert_eq!(part_of(name), PARTS[part], "{name}");
+        }
+        let syms = vec![
+            (0, 10, "__mulsi3".to_string()),
+            (10, 30, "planner_core::fixed::isqrt".to_string()),
+            (40, 5, "__divmodhi4".to_string()),
+        ];
+        let got = parts(&syms);
+        assert_eq!(got[0], (PARTS[0], 30));
+        assert_eq!(got[7], (PARTS[7], 15));
+        assert_eq!(got.iter().map(|p| p.1).sum::<u32>(), 45);
+    }
+}
