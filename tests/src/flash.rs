@@ -59,6 +59,35 @@ pub fn parts(symbols: &[(u32, u32, String)]) -> Vec<(&'static str, u32)> {
         .collect()
 }
 
+/// The module of planner-core a symbol of its part is in: the path segment
+/// after the first `planner_core::` in its name (`Planner` for the
+/// planner's own methods, in the crate's root).
+pub fn planner_module(name: &str) -> Option<&str> {
+    let rest = &name[name.find("planner_core::")? + "planner_core::".len()..];
+    let end = rest
+        .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+        .unwrap_or(rest.len());
+    Some(&rest[..end])
+}
+
+/// Bytes of planner-core's functions (the first of [`PARTS`]) per module,
+/// largest first.
+pub fn planner_modules(symbols: &[(u32, u32, String)]) -> Vec<(String, u32)> {
+    let mut by: Vec<(String, u32)> = Vec::new();
+    for (_, size, name) in symbols {
+        if part_of(name) != PARTS[0] {
+            continue;
+        }
+        let m = planner_module(name).unwrap_or("?");
+        match by.iter_mut().find(|(k, _)| k == m) {
+            Some((_, b)) => *b += size,
+            None => by.push((m.to_string(), *size)),
+        }
+    }
+    by.sort_by(|a, b| b.1.cmp(&a.1).then_with(|| a.0.cmp(&b.0)));
+    by
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -96,5 +125,38 @@ mod tests {
         assert_eq!(got[0], (PARTS[0], 30));
         assert_eq!(got[7], (PARTS[7], 15));
         assert_eq!(got.iter().map(|p| p.1).sum::<u32>(), 45);
+    }
+
+    #[test]
+    fn planner_symbols_go_to_their_modules() {
+        assert_eq!(
+            planner_module("<planner_core::escape::Escape>::force"),
+            Some("escape")
+        );
+        assert_eq!(planner_module("planner_core::fixed::isqrt"), Some("fixed"));
+        assert_eq!(
+            planner_module("<planner_core::Planner>::set_goal"),
+            Some("Planner")
+        );
+        assert_eq!(
+            planner_module(
+                "<core::array::iter::IntoIter<&planner_core::sensors::Reading, 3>>::next"
+            ),
+            Some("sensors")
+        );
+        assert_eq!(planner_module("__mulsi3"), None);
+        let syms: Vec<(u32, u32, String)> = [
+            (4, "<planner_core::escape::Escape>::force"),
+            (9, "planner_core::fixed::isqrt"),
+            (3, "planner_core::escape::reach_mm"),
+            (50, "firmware_avr::timed_step"),
+        ]
+        .iter()
+        .map(|&(size, name)| (0, size, name.to_string()))
+        .collect();
+        assert_eq!(
+            planner_modules(&syms),
+            [("fixed".to_string(), 9), ("escape".to_string(), 7)]
+        );
     }
 }

@@ -2,7 +2,7 @@
 //! goes, by part (`rover_tests::flash`), from the ELF built now.
 
 use rover_tests::avr::{elf_size, firmware_elf, set_back_firmware_elf};
-use rover_tests::flash::parts;
+use rover_tests::flash::{parts, planner_modules};
 use rover_tests::profile::text_symbols;
 
 fn main() {
@@ -13,7 +13,8 @@ fn main() {
         firmware_elf()
     };
     let (text, data, _) = elf_size(&elf);
-    let parts = parts(&text_symbols(&elf));
+    let symbols = text_symbols(&elf);
+    let parts = parts(&symbols);
     let counted: u32 = parts.iter().map(|p| p.1).sum();
     let build = if set_back { " (set-back)" } else { "" };
     println!("avr flash{build}: text={text} data={data}, by part:");
@@ -24,4 +25,8 @@ fn main() {
         "{:>7}  in no symbol (the vector table, alignment)",
         text.saturating_sub(counted)
     );
+    println!("planner-core's functions by module (its inlined step not included):");
+    for (module, bytes) in planner_modules(&symbols) {
+        println!("{bytes:>7}  {module}");
+    }
 }
