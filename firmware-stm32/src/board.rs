@@ -141,16 +141,18 @@ pub fn run() -> ! {
                 Some(Request::Sensors) => match last_raw {
                     Some(raw) => {
                         let _ = tx.write_char('D');
+                        let mut byte = |b: u8| {
+                            let _ = tx.write_char(b as char);
+                        };
                         for c in raw {
-                            write_number(&mut tx, c);
+                            byte(b' ');
+                            protocol::write_number(c, &mut byte);
                         }
                         for f in protocol::sensor_readings(planner.config(), &raw) {
+                            byte(b' ');
                             match f {
-                                SensorField::Number(n) => write_number(&mut tx, n),
-                                SensorField::Sign(c) => {
-                                    let _ = tx.write_char(' ');
-                                    let _ = tx.write_char(c as char);
-                                }
+                                SensorField::Number(n) => protocol::write_number(n, &mut byte),
+                                SensorField::Sign(c) => byte(c),
                             }
                         }
                         "\n"
@@ -216,24 +218,5 @@ pub fn run() -> ! {
             planner.guard_raw(&raw, remaining)
         });
         drive(wheels);
-    }
-}
-
-/// A space and `v` in decimal: without `core::fmt`'s integer formatting
-/// (kilobytes of flash).
-fn write_number(tx: &mut impl core::fmt::Write, v: u16) {
-    let mut p: u16 = 1;
-    while p <= v / 10 {
-        p *= 10;
-    }
-    let _ = tx.write_char(' ');
-    let mut rest = v;
-    loop {
-        let _ = tx.write_char((b'0' + (rest / p) as u8) as char);
-        rest %= p;
-        if p == 1 {
-            break;
-        }
-        p /= 10;
     }
 }

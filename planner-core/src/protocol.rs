@@ -135,6 +135,27 @@ pub fn sensor_readings<'a>(
         })
 }
 
+/// `v` in decimal, a byte at a time to `out`: for a firmware without an
+/// integer formatter of its own (the STM32's; `core::fmt`'s costs
+/// kilobytes of flash). No buffer, no index.
+pub fn write_number(v: u16, mut out: impl FnMut(u8)) {
+    // The largest power of ten not above `v` (1 for 0), then a digit per
+    // power.
+    let mut p: u16 = 1;
+    while p <= v / 10 {
+        p *= 10;
+    }
+    let mut rest = v;
+    loop {
+        out(b'0' + (rest / p) as u8);
+        rest %= p;
+        if p == 1 {
+            break;
+        }
+        p /= 10;
+    }
+}
+
 /// Gathers received bytes into lines and parses each.
 #[derive(Clone, Debug, Default)]
 pub struct LineReader {
@@ -209,6 +230,28 @@ mod tests {
             line(&cfg, &[u16::MAX; 5]),
             "D 65535 65535 65535 65535 65535 ! ! ! ! !\n"
         );
+    }
+
+    #[test]
+    fn numbers_are_written_in_decimal() {
+        for v in [
+            0u16,
+            1,
+            9,
+            10,
+            99,
+            100,
+            101,
+            1_023,
+            9_999,
+            10_000,
+            60_001,
+            u16::MAX,
+        ] {
+            let mut got = std::vec::Vec::new();
+            write_number(v, |b| got.push(b));
+            assert_eq!(got, v.to_string().into_bytes());
+        }
     }
 
     /// The line as the firmwares write it.
