@@ -118,9 +118,10 @@ pub enum SensorField {
 
 /// What the calibration reads from each of the counts `raw`, as the reply
 /// to `D` says it (see the table above). The firmwares write `D`, the five
-/// counts and these, each after a space, and `\n`, with the number
-/// formatting they already have (ufmt on the AVR): the line is the same on
-/// both without a formatter of its own in the image.
+/// counts and these, each after a space, and `\n`, each with its own
+/// number formatting (ufmt on the AVR, which its telemetry links already;
+/// [`write_number`] on the STM32): the words are the core's, the same on
+/// both.
 pub fn sensor_readings<'a>(
     cfg: &'a Config,
     raw: &'a RawCounts,
