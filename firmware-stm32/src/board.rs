@@ -24,7 +24,7 @@ use defmt_rtt as _;
 use micromath::F32Ext;
 use panic_probe as _;
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::protocol::{self, Request, SensorField};
+use planner_core::protocol::{self, Request};
 use planner_core::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
 use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
@@ -140,22 +140,10 @@ pub fn run() -> ! {
                 // The counts, then what the planner reads from each.
                 Some(Request::Sensors) => match last_raw {
                     Some(raw) => {
-                        let _ = tx.write_char('D');
-                        let mut byte = |b: u8| {
+                        protocol::write_sensor_line(planner.config(), &raw, |b| {
                             let _ = tx.write_char(b as char);
-                        };
-                        for c in raw {
-                            byte(b' ');
-                            protocol::write_number(c, &mut byte);
-                        }
-                        for f in protocol::sensor_readings(planner.config(), &raw) {
-                            byte(b' ');
-                            match f {
-                                SensorField::Number(n) => protocol::write_number(n, &mut byte),
-                                SensorField::Sign(c) => byte(c),
-                            }
-                        }
-                        "\n"
+                        });
+                        ""
                     }
                     None => "ERR\n",
                 },

@@ -118,10 +118,9 @@ pub enum SensorField {
 
 /// What the calibration reads from each of the counts `raw`, as the reply
 /// to `D` says it (see the table above). The firmwares write `D`, the five
-/// counts and these, each after a space, and `\n`, each with its own
-/// number formatting (ufmt on the AVR, which its telemetry links already;
-/// [`write_number`] on the STM32): the words are the core's, the same on
-/// both.
+/// counts and these, each after a space, and `\n`: the STM32 by
+/// [`write_sensor_line`], the AVR with the number formatting its telemetry
+/// links already (ufmt); the words are the core's, the same on both.
 pub fn sensor_readings<'a>(
     cfg: &'a Config,
     raw: &'a RawCounts,
@@ -134,6 +133,26 @@ pub fn sensor_readings<'a>(
             Reading::TooClose => SensorField::Sign(b'<'),
             Reading::Implausible => SensorField::Sign(b'!'),
         })
+}
+
+/// The whole reply to `D` for the counts `raw`, `\n` ended, a byte at a
+/// time to `out`, numbers by [`write_number`]: what the STM32 sends, and
+/// what the tests hold the AVR's line (numbers by ufmt, which its telemetry
+/// links already) to.
+pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, mut out: impl FnMut(u8)) {
+    out(b'D');
+    for &c in raw {
+        out(b' ');
+        write_number(c, &mut out);
+    }
+    for f in sensor_readings(cfg, raw) {
+        out(b' ');
+        match f {
+            SensorField::Number(n) => write_number(n, &mut out),
+            SensorField::Sign(c) => out(c),
+        }
+    }
+    out(b'\n');
 }
 
 /// `v` in decimal, a byte at a time to `out`: for a firmware without an
@@ -255,19 +274,11 @@ mod tests {
         }
     }
 
-    /// The line as the firmwares write it.
+    /// The line as the STM32 writes it.
     fn line(cfg: &Config, raw: &RawCounts) -> std::string::String {
-        let mut s = std::string::String::from("D");
-        for c in raw {
-            s += &format!(" {c}");
-        }
-        for f in sensor_readings(cfg, raw) {
-            match f {
-                SensorField::Number(n) => s += &format!(" {n}"),
-                SensorField::Sign(c) => s += &format!(" {}", c as char),
-            }
-        }
-        s + "\n"
+        let mut got = std::vec::Vec::new();
+        write_sensor_line(cfg, raw, |b| got.push(b));
+        std::string::String::from_utf8(got).unwrap()
     }
 
     #[test]

@@ -264,9 +264,11 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
             100.0 * n as f64 / d as f64
         }
     };
+    // The split on the totals line, so that one line per seed still holds it.
+    let split = escape_split(rows).map_or_else(String::new, |x| format!(" | {x}"));
     let _ = writeln!(
         s,
-        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}",
+        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}{split}",
         t.runs,
         t.reached,
         t.solvable,
@@ -280,11 +282,6 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
         t.within_125,
         t.reached
     );
-    if let Some(split) = escape_split(rows) {
-        // On the totals line, so that one line per seed still holds them.
-        s.pop();
-        let _ = writeln!(s, " | {split}");
-    }
     s
 }
 

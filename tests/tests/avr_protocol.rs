@@ -4,27 +4,19 @@
 //! driving; `S` stops the motors; `D` reports the sensors as the host's
 //! core reads them.
 
-use planner_core::protocol::{sensor_readings, SensorField};
+use planner_core::protocol::write_sensor_line;
 use planner_core::{AdcProfile, ConfigBuilder, RawCounts};
 use rover_tests::avr::{wheels_for_1ms, Avr};
 
 /// The `D` line the host's core writes for `raw` with the AVR's default
-/// configuration.
+/// configuration, without its `\n`.
 fn host_sensor_line(raw: &RawCounts) -> String {
     let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
         .build()
         .unwrap();
-    let mut line = String::from("D");
-    for c in raw {
-        line += &format!(" {c}");
-    }
-    for f in sensor_readings(&cfg, raw) {
-        match f {
-            SensorField::Number(n) => line += &format!(" {n}"),
-            SensorField::Sign(c) => line += &format!(" {}", c as char),
-        }
-    }
-    line
+    let mut line = Vec::new();
+    write_sensor_line(&cfg, raw, |b| line.push(b));
+    String::from_utf8(line).unwrap().trim_end().to_string()
 }
 
 /// The counts of a `D` line.

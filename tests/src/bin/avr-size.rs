@@ -25,6 +25,10 @@ fn main() {
         "{:>7}  in no symbol (the vector table, alignment)",
         text.saturating_sub(counted)
     );
+    println!(
+        "{:>7}  the planner in all (its functions and its inlined step)",
+        parts[0].1 + parts[1].1
+    );
     println!("planner-core's functions by module (its inlined step not included):");
     for (module, bytes) in planner_modules(&symbols) {
         println!("{bytes:>7}  {module}");
