@@ -3,7 +3,7 @@
 
 use crate::reference;
 use crate::scenario::{Scenario, ScenarioError};
-use crate::sim::{self, Outcome, SimConfig};
+use crate::sim::{self, Contact, Outcome, SimConfig, Touched};
 use crate::svg;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -39,6 +39,10 @@ pub struct Row {
     pub file: PathBuf,
     /// Seed of the run's sensor noise and slip.
     pub seed: u64,
+    /// What the disc touched, in a collision (absent from rows written
+    /// before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub contact: Option<Contact>,
 }
 
 impl Row {
@@ -163,6 +167,7 @@ fn run_loaded(
                 solvable: sc.solvable,
                 file: file.clone(),
                 seed: cfg.seed,
+                contact: res.contact,
             }
         })
         .collect();
@@ -182,6 +187,9 @@ pub struct Totals {
     pub reached: usize,
     /// Collisions.
     pub collisions: usize,
+    /// Of the collisions, those with a moving circle: within 45° of the
+    /// heading, and at the disc's side or back (where no beam looks).
+    pub movers: (usize, usize),
     /// Reported unreachable.
     pub unreachable: usize,
     /// Unsolvable scenarios reported unreachable.
@@ -208,6 +216,14 @@ pub fn totals(rows: &[Row]) -> Totals {
             .iter()
             .filter(|r| r.outcome == Outcome::Collision)
             .count(),
+        movers: (
+            rows.iter()
+                .filter(|r| r.contact.is_some_and(|c| c.with == Touched::MoverAhead))
+                .count(),
+            rows.iter()
+                .filter(|r| r.contact.is_some_and(|c| c.with == Touched::MoverBeside))
+                .count(),
+        ),
         unreachable: rows
             .iter()
             .filter(|r| r.outcome == Outcome::Unreachable)
@@ -266,9 +282,15 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
     };
     // The split on the totals line, so that one line per seed still holds it.
     let split = escape_split(rows).map_or_else(String::new, |x| format!(" | {x}"));
+    // Only where moving circles were met, so that the line of a static set
+    // is as it was.
+    let movers = match t.movers {
+        (0, 0) => String::new(),
+        (ahead, beside) => format!(" ({ahead} with a mover ahead, {beside} beside or behind)"),
+    };
     let _ = writeln!(
         s,
-        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}{split}",
+        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {}{movers} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}{split}",
         t.runs,
         t.reached,
         t.solvable,
@@ -502,6 +524,7 @@ mod tests {
             solvable: true,
             file: file.into(),
             seed,
+            contact: None,
         }
     }
 

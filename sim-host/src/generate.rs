@@ -28,6 +28,13 @@ pub enum Kind {
     /// Every goal is walled in (`solvable = false`): the right outcome is
     /// to report it unreachable.
     Walled,
+    /// The circle world of the same seed and six circles moving back and
+    /// forth across the straight way from start to goal (radii 0.1–0.3 m,
+    /// 0.05–0.2 m/s, slower than the rover's 0.25; each on a straight run
+    /// of 1–4 m that keeps clear of the static circles, the start and the
+    /// goal). The reference ignores them: only the static world decides
+    /// what is reachable.
+    Moving,
 }
 
 impl Kind {
@@ -37,6 +44,7 @@ impl Kind {
             Kind::Circles => "gen",
             Kind::Boxes => "box",
             Kind::Walled => "walled",
+            Kind::Moving => "mov",
         }
     }
 
@@ -46,6 +54,7 @@ impl Kind {
             Kind::Circles => "random circle world with the EAPF paper's environment 2 parameters",
             Kind::Boxes => "random world of turned boxes and thin walls in the EAPF paper's environment 2 arena",
             Kind::Walled => "random world of turned boxes and thin walls with the goal or the start walled in: unsolvable",
+            Kind::Moving => "random circle world with the EAPF paper's environment 2 parameters and six circles moving across the straight way",
         }
     }
 }
@@ -63,6 +72,14 @@ const KEEP_CLEAR_M: f64 = 0.15;
 /// point walled in, m.
 const RING_CORNERS: [usize; 2] = [5, 9];
 const RING_RADII: [f64; 2] = [0.7, 2.2];
+/// A moving world's movers: their count, radii (m), speeds (m/s), the
+/// length of their runs (m) and where along the straight way from start to
+/// goal their runs cross it (fractions of it).
+const MOVERS: usize = 6;
+const MOVER_RADII: [f64; 2] = [0.1, 0.3];
+const MOVER_SPEEDS: [f64; 2] = [0.05, 0.2];
+const MOVER_RUNS: [f64; 2] = [1.0, 4.0];
+const MOVER_CROSSINGS: [f64; 2] = [0.15, 0.85];
 
 /// A box world's goal is written unsolvable only when the reference finds
 /// no path for a disc of a radius this much smaller (m) either: the
@@ -125,26 +142,84 @@ impl RandomWorld {
     /// The scenario file text. Circles that would come within
     /// `robot_radius + KEEP_CLEAR_M` (0.15 m) of the start or goal are drawn again.
     pub fn to_toml(&self, description: &str) -> String {
-        let mut rng = Pcg64::seed_from_u64(self.seed);
         let mut s = self.header(description);
         let _ = writeln!(
             s,
             "# generated: seed {}, {} circles, radii {}..{} m",
             self.seed, self.circles, self.radii[0], self.radii[1]
         );
+        for ([x, y], r) in self.circle_list() {
+            let _ = writeln!(
+                s,
+                "\n[[circle]]\ncenter = [{x:.3}, {y:.3}]\nradius = {r:.3}"
+            );
+        }
+        s
+    }
+
+    /// The circle world's circles (centre, radius; m), as written to the
+    /// file (millimetres).
+    fn circle_list(&self) -> Vec<([f64; 2], f64)> {
+        let mut rng = Pcg64::seed_from_u64(self.seed);
         let keep = self.keep_clear_m();
-        let mut n = 0;
-        while n < self.circles {
+        let mm = |v: f64| (v * 1000.0).round() / 1000.0;
+        let mut circles = Vec::with_capacity(self.circles);
+        while circles.len() < self.circles {
             let r = rng.gen_range(self.radii[0]..=self.radii[1]);
             let x = rng.gen_range(0.0..self.size[0]);
             let y = rng.gen_range(0.0..self.size[1]);
             let far = |p: [f64; 2]| (p[0] - x).hypot(p[1] - y) > r + keep;
-            if !(far(self.start) && far(self.goal)) {
+            if far(self.start) && far(self.goal) {
+                circles.push(([mm(x), mm(y)], mm(r)));
+            }
+        }
+        circles
+    }
+
+    /// A moving world's file text ([`Kind::Moving`]): the circle world of
+    /// the same seed, then its movers, drawn from their own stream so that
+    /// the circles are those of `gen-<seed>`. A mover's run is drawn again
+    /// while it comes within the mover's radius of a static circle, or
+    /// within it plus `robot_radius + KEEP_CLEAR_M` of the start or goal
+    /// (the rover is not struck where it begins or ends).
+    pub fn moving_toml(&self, description: &str) -> String {
+        let mut s = self.to_toml(description);
+        let circles = self.circle_list();
+        let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x4d4f_5645);
+        let v = |p: [f64; 2]| V2::new(p[0], p[1]);
+        let (start, goal) = (v(self.start), v(self.goal));
+        let keep = self.keep_clear_m();
+        let _ = writeln!(
+            s,
+            "\n# {MOVERS} movers, radii {}..{} m, {}..{} m/s, runs {}..{} m across the straight way",
+            MOVER_RADII[0], MOVER_RADII[1], MOVER_SPEEDS[0], MOVER_SPEEDS[1], MOVER_RUNS[0], MOVER_RUNS[1]
+        );
+        let mut n = 0;
+        while n < MOVERS {
+            let r = rng.gen_range(MOVER_RADII[0]..=MOVER_RADII[1]);
+            let speed = rng.gen_range(MOVER_SPEEDS[0]..=MOVER_SPEEDS[1]);
+            let run = rng.gen_range(MOVER_RUNS[0]..=MOVER_RUNS[1]);
+            let cross =
+                start + (goal - start) * rng.gen_range(MOVER_CROSSINGS[0]..=MOVER_CROSSINGS[1]);
+            let dir = V2::from_angle(rng.gen_range(0.0..PI));
+            // Where along its run it crosses the way.
+            let before = rng.gen_range(0.0..=run);
+            let (a, b) = (cross - dir * before, cross + dir * (run - before));
+            let clear_of = |c: V2, d: f64| point_segment_distance(c, a, b) > d;
+            let inside =
+                |p: V2| p.x > r && p.y > r && p.x < self.size[0] - r && p.y < self.size[1] - r;
+            if !(inside(a)
+                && inside(b)
+                && clear_of(start, r + keep)
+                && clear_of(goal, r + keep)
+                && circles.iter().all(|&(c, cr)| clear_of(v(c), cr + r)))
+            {
                 continue;
             }
             let _ = writeln!(
                 s,
-                "\n[[circle]]\ncenter = [{x:.3}, {y:.3}]\nradius = {r:.3}"
+                "\n[[moving]]\ncenter = [{:.3}, {:.3}]\nradius = {r:.3}\nwaypoints = [[{:.3}, {:.3}]]\nspeed = {speed:.3}",
+                a.x, a.y, b.x, b.y
             );
             n += 1;
         }
@@ -160,6 +235,7 @@ pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64)
         Kind::Circles => w.to_toml(kind.description()),
         Kind::Boxes => w.boxes_toml(kind.description()),
         Kind::Walled => w.walled_toml(kind.description()),
+        Kind::Moving => w.moving_toml(kind.description()),
     }
 }
 
@@ -391,6 +467,46 @@ mod tests {
             clear > sc.robot_radius + KEEP_CLEAR_M - 1e-9,
             "seed {seed}: {clear}"
         );
+    }
+
+    #[test]
+    fn moving_worlds_are_the_circle_world_and_movers_that_cross_the_way_clear_of_it() {
+        for seed in 1..=4 {
+            let sc = parsed(&generated(Kind::Moving, seed));
+            let circles = parsed(&generated(Kind::Circles, seed));
+            assert_eq!(sc.circle, circles.circle, "seed {seed}");
+            assert!(sc.solvable);
+            assert_eq!(sc.moving.len(), MOVERS);
+            let (start, goal) = (V2::new(START[0], START[1]), V2::new(GOAL[0], GOAL[1]));
+            for m in &sc.moving {
+                let (a, b) = (
+                    V2::new(m.center[0], m.center[1]),
+                    V2::new(m.waypoints[0][0], m.waypoints[0][1]),
+                );
+                assert!((MOVER_RADII[0]..=MOVER_RADII[1]).contains(&m.radius));
+                assert!((MOVER_SPEEDS[0]..=MOVER_SPEEDS[1]).contains(&m.speed));
+                let run = a.dist(b);
+                assert!(
+                    (MOVER_RUNS[0] - 0.01..=MOVER_RUNS[1] + 0.01).contains(&run),
+                    "{run}"
+                );
+                // It crosses the straight way (the two segments meet).
+                let meet = crate::geom::segment_segment_distance(a, b, start, goal);
+                assert!(meet < 0.01, "seed {seed}: {meet}");
+                // Never onto a static circle, the start or the goal.
+                for c in &sc.circle {
+                    let d = point_segment_distance(V2::new(c.center[0], c.center[1]), a, b);
+                    assert!(d > c.radius + m.radius - 0.002, "seed {seed}");
+                }
+                for p in [start, goal] {
+                    let d = point_segment_distance(p, a, b) - m.radius;
+                    assert!(
+                        d > sc.robot_radius + KEEP_CLEAR_M - 0.002,
+                        "seed {seed}: {d}"
+                    );
+                }
+            }
+        }
     }
 
     #[test]

@@ -228,6 +228,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 "min_clear    {:.3} m\nvirtual_obs  {}\n",
                 res.min_clearance, res.virtual_dropped
             );
+            if let Some(c) = res.contact {
+                report += &format!("contact      {}\n", c.describe());
+            }
             // Planner `route`: the route at the end (waypoints, then the
             // goal), or none on the graph.
             match res.route.len() {

@@ -2,7 +2,8 @@
 //! command as the firmwares' executor does (a turn in place, a pause of one
 //! sensor period after it, then an advance that asks the core's guard
 //! before every centimetre, the first included), checks every motion
-//! exactly against the world, and feeds the planner odometry (exact, or
+//! exactly against the world and every stand (a turn on the spot, a pause)
+//! against the moving circles, and feeds the planner odometry (exact, or
 //! with seeded slip).
 
 use crate::geom::V2;
@@ -39,6 +40,100 @@ impl Outcome {
             Outcome::Unreachable => "unreachable",
             Outcome::Timeout => "timeout",
         }
+    }
+}
+
+/// How a run that ended in a collision ended: what the disc touched, and
+/// whether the rover was driving or standing (turning in place, pausing
+/// after a turn, waiting for a sensor).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+pub struct Contact {
+    /// What it touched.
+    pub with: Touched,
+    /// Whether the rover stood: then only a moving circle can reach it.
+    pub standing: bool,
+}
+
+impl Contact {
+    /// Its words in the run's figures.
+    pub fn describe(self) -> String {
+        format!(
+            "{} while {}",
+            self.with.as_str(),
+            if self.standing { "standing" } else { "driving" }
+        )
+    }
+}
+
+/// What the disc touched.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "kebab-case")]
+pub enum Touched {
+    /// A wall or a static obstacle.
+    Static,
+    /// A moving circle within 45° of the heading, where the beams look
+    /// (their sector is ±40°).
+    MoverAhead,
+    /// A moving circle at the disc's side or back, where no beam looks:
+    /// it reached the rover, which could not have seen it come.
+    MoverBeside,
+}
+
+impl Touched {
+    /// Its name in the `--json` rows and the run's figures.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Touched::Static => "static",
+            Touched::MoverAhead => "mover-ahead",
+            Touched::MoverBeside => "mover-beside",
+        }
+    }
+
+    /// What a disc of radius `r` at `p` facing `heading` (rad) touches at
+    /// time `t`: the nearer of the static world and the nearest moving
+    /// circle, and where that circle is.
+    fn at(world: &World, p: V2, t: f64, heading: f64, r: f64) -> Touched {
+        let fixed = world.static_sweep_clearance(p, p);
+        let mover = world
+            .moving
+            .iter()
+            .map(|m| (p.dist(m.center_at(t)) - m.radius, m.center_at(t)))
+            .min_by(|a, b| a.0.total_cmp(&b.0));
+        match mover {
+            Some((c, centre)) if c < fixed.min(r + 1e-3) + 1e-9 => {
+                let bearing = wrap((centre.y - p.y).atan2(centre.x - p.x) - heading);
+                if bearing.abs() <= 45f64.to_radians() {
+                    Touched::MoverAhead
+                } else {
+                    Touched::MoverBeside
+                }
+            }
+            _ => Touched::Static,
+        }
+    }
+
+    /// What the disc touched first while moving `a → b` during `[t0, t1]`
+    /// (a piece that ended in a collision): sampled 20 times along it.
+    fn first_in(
+        world: &World,
+        (a, b): (V2, V2),
+        (t0, t1): (f64, f64),
+        heading: f64,
+        r: f64,
+    ) -> Touched {
+        const SAMPLES: usize = 20;
+        let at = |k: usize| {
+            let f = k as f64 / SAMPLES as f64;
+            (a + (b - a) * f, t0 + (t1 - t0) * f)
+        };
+        let k = (0..=SAMPLES)
+            .find(|&k| {
+                let (p, t) = at(k);
+                world.clearance(p, t) <= r
+            })
+            .unwrap_or(SAMPLES);
+        let (p, t) = at(k);
+        Touched::at(world, p, t, heading, r)
     }
 }
 
@@ -123,6 +218,8 @@ pub struct RunResult {
     pub path_length: f64,
     /// Smallest clearance between the robot's disc and any obstacle, m.
     pub min_clearance: f64,
+    /// What the disc touched, when the run ended in a collision.
+    pub contact: Option<Contact>,
     /// The true driven path, rows at most 1 cm apart.
     pub trace: Vec<TraceRow>,
     /// Collision points the planner saw (world, m).
@@ -142,11 +239,16 @@ pub struct RunResult {
     pub route: Vec<V2>,
 }
 
+/// The longest piece of a stand checked against the moving circles as one
+/// linear motion, s: the time an advance's 1 cm piece takes at 0.25 m/s.
+const STAND_PIECE_S: f64 = 0.04;
+
 /// The true motion of a run: trace rows, driven length, smallest clearance.
 struct Track {
     trace: Vec<TraceRow>,
     length: f64,
     min_clear: f64,
+    contact: Option<Contact>,
 }
 
 impl Track {
@@ -161,6 +263,7 @@ impl Track {
             }],
             length: 0.0,
             min_clear: world.clearance(p, 0.0) - r,
+            contact: None,
         }
     }
 
@@ -183,6 +286,41 @@ impl Track {
         self.min_clear = self.min_clear.min(c - r);
         self.length += a.dist(b);
         self.row(t.1, b, heading);
+        if c <= r && self.contact.is_none() {
+            self.contact = Some(Contact {
+                with: Touched::first_in(world, (a, b), t, heading, r),
+                standing: false,
+            });
+        }
+        c
+    }
+
+    /// The disc of radius `r` stands at `p` during `[t0, t1]` (turning in
+    /// place, pausing after a turn, waiting for a sensor): the smallest
+    /// clearance to the moving circles meanwhile (at most `r`: one ran into
+    /// it). Why: a disc that stands sweeps nothing new of the static world,
+    /// but a moving circle can still reach it. The interval is checked in
+    /// pieces of at most [`STAND_PIECE_S`], so that a circle turning at a
+    /// waypoint is linear over each.
+    fn stand(&mut self, world: &World, p: V2, heading: f64, (t0, t1): (f64, f64), r: f64) -> f64 {
+        if world.moving.is_empty() || t1 <= t0 {
+            return f64::INFINITY;
+        }
+        let pieces = ((t1 - t0) / STAND_PIECE_S).ceil().max(1.0) as usize;
+        let mut c = f64::INFINITY;
+        for k in 0..pieces {
+            let a = t0 + (t1 - t0) * k as f64 / pieces as f64;
+            let b = t0 + (t1 - t0) * (k + 1) as f64 / pieces as f64;
+            let piece = world.moving_sweep_clearance(p, p, a, b);
+            if piece <= r && self.contact.is_none() {
+                self.contact = Some(Contact {
+                    with: Touched::first_in(world, (p, p), (a, b), heading, r),
+                    standing: true,
+                });
+            }
+            c = c.min(piece);
+        }
+        self.min_clear = self.min_clear.min(c - r);
         c
     }
 
@@ -194,6 +332,7 @@ impl Track {
             steps,
             path_length: self.length,
             min_clearance: self.min_clear,
+            contact: self.contact,
             trace: self.trace,
             seen: Vec::new(),
             remembered: Vec::new(),
@@ -291,14 +430,24 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             }
             Status::SensorFault => {
                 faults += 1;
-                t += 0.04; // wait for the next sensor value
+                // Wait for the next sensor value.
+                if track.stand(&world, p, heading, (t, t + 0.04), r) <= r {
+                    outcome = Outcome::Collision;
+                    break;
+                }
+                t += 0.04;
                 continue;
             }
             Status::Moving => {}
         }
         // Turn in place (a disc turning in place sweeps nothing new).
         let dturn = wrap(out.heading - oh);
-        t += dturn.abs() / cfg.turn_rate;
+        let turned = t + dturn.abs() / cfg.turn_rate;
+        if track.stand(&world, p, heading, (t, turned), r) <= r {
+            outcome = Outcome::Collision;
+            break;
+        }
+        t = turned;
         let mut true_turn = dturn;
         if let Some((_, hs)) = cfg.slip {
             true_turn += unit.sample(&mut rng) * hs * dturn.abs();
@@ -312,6 +461,10 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         // before it advances, so that its guard first looks at the turned
         // view (`ExecutorConfig::settle_ticks`, 1 ms ticks).
         if out.step_m > 0.0 && dturn.abs() > settle_after_rad {
+            if track.stand(&world, p, heading, (t, t + settle_s), r) <= r {
+                outcome = Outcome::Collision;
+                break;
+            }
             t += settle_s;
         }
         // Advance in pieces of at most 1 cm, asking the guard before each
@@ -456,7 +609,12 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
                     continue;
                 }
                 let h = (q.y - p.y).atan2(q.x - p.x);
-                t += wrap(h - heading).abs() / cfg.turn_rate;
+                let turned = t + wrap(h - heading).abs() / cfg.turn_rate;
+                if track.stand(&world, p, heading, (t, turned), r) <= r {
+                    outcome = Outcome::Collision;
+                    break 'drive;
+                }
+                t = turned;
                 heading = h;
                 let n = (d / 0.01).ceil() as usize;
                 let mut a = p;
@@ -486,5 +644,76 @@ fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
         virtual_obstacles: vos,
         virtual_dropped: dropped,
         ..track.into_result(outcome, steps)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use std::path::Path;
+
+    /// Facing away from the goal, the rover's first command is a half turn
+    /// on the spot (1.57 s); a circle at 2 m/s crosses the start during it
+    /// and is 16 s down its 33.5 m way before the rover advances.
+    const STRUCK_WHILE_TURNING: &str = r#"
+format = 1
+name = "struck-while-turning"
+bounds = [0.0, 0.0, 6.0, 4.0]
+start = [1.0, 2.0]
+start_heading = 180.0
+goal = [5.0, 2.0]
+
+[[moving]]
+center = [1.0, 3.5]
+radius = 0.2
+waypoints = [[1.0, -30.0]]
+speed = 2.0
+"#;
+
+    #[test]
+    fn a_circle_that_runs_into_a_standing_rover_is_a_collision() {
+        let sc = Scenario::parse(STRUCK_WHILE_TURNING, Path::new("struck.toml")).unwrap();
+        for planner in [PlannerKind::Eapf, PlannerKind::Liquid] {
+            let cfg = SimConfig {
+                planner,
+                ..SimConfig::default()
+            };
+            let res = run(&sc, &cfg, None);
+            assert_eq!(res.outcome, Outcome::Collision, "{planner:?}");
+            // From its left, with the rover facing away from the goal.
+            let struck = Contact {
+                with: Touched::MoverBeside,
+                standing: true,
+            };
+            assert_eq!(res.contact, Some(struck), "{planner:?}");
+            assert!(res.min_clearance <= 0.0, "{planner:?}");
+            // It was struck on the spot: the rover had not driven.
+            assert_eq!(res.path_length, 0.0, "{planner:?}");
+        }
+    }
+
+    #[test]
+    fn a_stand_checks_every_piece_of_a_circles_back_and_forth() {
+        // A circle of 0.1 m comes from 1 m above the point to 0.2 m above
+        // it at 1 m/s and goes back: nearest at 0.8 s, 0.1 m off the
+        // rim of a 0.1 m disc; at 0 s and 1.6 s it is where it began.
+        let text = STRUCK_WHILE_TURNING.replace(
+            "center = [1.0, 3.5]\nradius = 0.2\nwaypoints = [[1.0, -30.0]]\nspeed = 2.0",
+            "center = [1.0, 3.0]\nradius = 0.1\nwaypoints = [[1.0, 2.2]]\nspeed = 1.0",
+        );
+        let sc = Scenario::parse(&text, Path::new("near.toml")).unwrap();
+        let world = World::from_scenario(&sc);
+        let p = V2::new(1.0, 2.0);
+        let mut track = Track::new(&world, p, 0.0, 0.1);
+        // As one linear motion its two ends would be 0.9 m clear.
+        assert!((world.moving_sweep_clearance(p, p, 0.0, 1.6) - 0.9).abs() < 1e-9);
+        let c = track.stand(&world, p, 0.0, (0.0, 1.6), 0.1);
+        assert!((c - 0.1).abs() < 0.02, "{c}");
+        assert!((track.min_clear - 0.0).abs() < 0.02, "{}", track.min_clear);
+        // Before it comes near, a stand sees it where it is then.
+        let early = track.stand(&world, p, 0.0, (0.0, 0.4), 0.1);
+        assert!((early - 0.5).abs() < 1e-9, "{early}");
+        // A stand of no time checks nothing.
+        assert_eq!(track.stand(&world, p, 0.0, (2.0, 2.0), 0.1), f64::INFINITY);
     }
 }
