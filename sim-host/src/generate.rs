@@ -35,6 +35,13 @@ pub enum Kind {
     /// goal). The reference ignores them: only the static world decides
     /// what is reachable.
     Moving,
+    /// An indoor floor: the arena cut into rooms 2.4–4.2 m across by thin
+    /// walls, each room joined to the next through doorways 0.45–0.9 m
+    /// wide (a door on every wall of a random spanning tree of the rooms,
+    /// and on a third of the rest), with up to three turned boxes of
+    /// furniture in each room, kept off the doorways. Furniture that
+    /// closes the way is drawn again: every goal is reachable.
+    Rooms,
 }
 
 impl Kind {
@@ -45,6 +52,7 @@ impl Kind {
             Kind::Boxes => "box",
             Kind::Walled => "walled",
             Kind::Moving => "mov",
+            Kind::Rooms => "rooms",
         }
     }
 
@@ -55,6 +63,7 @@ impl Kind {
             Kind::Boxes => "random world of turned boxes and thin walls in the EAPF paper's environment 2 arena",
             Kind::Walled => "random world of turned boxes and thin walls with the goal or the start walled in: unsolvable",
             Kind::Moving => "random circle world with the EAPF paper's environment 2 parameters and six circles moving across the straight way",
+            Kind::Rooms => "random indoor floor in the EAPF paper's environment 2 arena: rooms, doorways and furniture",
         }
     }
 }
@@ -80,6 +89,17 @@ const MOVER_RADII: [f64; 2] = [0.1, 0.3];
 const MOVER_SPEEDS: [f64; 2] = [0.05, 0.2];
 const MOVER_RUNS: [f64; 2] = [1.0, 4.0];
 const MOVER_CROSSINGS: [f64; 2] = [0.15, 0.85];
+/// A floor's rooms (their widths and depths, m), doorways (widths, m; kept
+/// this far from a wall's ends), the share of the walls off the spanning
+/// tree that have a door too, and the furniture (boxes per room, their
+/// sides, m, and how far they keep from a doorway's middle, m).
+const ROOM_SIDES: [f64; 2] = [2.4, 4.2];
+const DOOR_WIDTHS: [f64; 2] = [0.45, 0.9];
+const DOOR_FROM_ENDS: f64 = 0.25;
+const EXTRA_DOORS: f64 = 0.33;
+const FURNITURE: usize = 3;
+const FURNITURE_SIDES: [f64; 2] = [0.2, 0.9];
+const FURNITURE_FROM_DOORS: f64 = 0.7;
 
 /// A box world's goal is written unsolvable only when the reference finds
 /// no path for a disc of a radius this much smaller (m) either: the
@@ -236,6 +256,7 @@ pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64)
         Kind::Boxes => w.boxes_toml(kind.description()),
         Kind::Walled => w.walled_toml(kind.description()),
         Kind::Moving => w.moving_toml(kind.description()),
+        Kind::Rooms => w.rooms_toml(kind.description()),
     }
 }
 
@@ -301,19 +322,8 @@ impl RandomWorld {
     fn boxes_with(&self, description: &str, extra: &[TurnedBox]) -> String {
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let keep = self.keep_clear_m();
-        let polygon = |body: &mut String, b: &TurnedBox| {
-            let points: Vec<String> = b
-                .corners()
-                .iter()
-                .map(|p| format!("[{:.3}, {:.3}]", p[0], p[1]))
-                .collect();
-            let _ = writeln!(body, "\n[[polygon]]\npoints = [{}]", points.join(", "));
-        };
         loop {
-            let mut body = String::new();
-            for b in extra {
-                polygon(&mut body, b);
-            }
+            let mut body = polygons_text(extra);
             let mut n = 0;
             while n < BOXES + WALLS {
                 let (w, h) = if n < BOXES {
@@ -340,7 +350,7 @@ impl RandomWorld {
                 if b.distance(self.start) <= keep || b.distance(self.goal) <= keep {
                     continue;
                 }
-                polygon(&mut body, &b);
+                body += &polygons_text(std::slice::from_ref(&b));
                 n += 1;
             }
             let head = |solvable: bool| {
@@ -368,6 +378,173 @@ impl RandomWorld {
     }
 }
 
+impl RandomWorld {
+    /// Wall lines across one side of the arena, `length` m long: room
+    /// sides drawn from [`ROOM_SIDES`] until the last room is at least the
+    /// smallest side, none within `keep` (plus half a wall) of `avoid`.
+    fn wall_lines(rng: &mut Pcg64, length: f64, avoid: [f64; 2], keep: f64) -> Vec<f64> {
+        loop {
+            let mut lines = Vec::new();
+            let mut at = rng.gen_range(ROOM_SIDES[0]..=ROOM_SIDES[1]);
+            while at < length - ROOM_SIDES[0] {
+                lines.push(at);
+                at += rng.gen_range(ROOM_SIDES[0]..=ROOM_SIDES[1]);
+            }
+            let clear = |&w: &f64| {
+                avoid
+                    .iter()
+                    .all(|a| (a - w).abs() > keep + WALL_THICKNESS / 2.0)
+            };
+            if lines.iter().all(clear) {
+                return lines;
+            }
+        }
+    }
+
+    /// A floor's file text ([`Kind::Rooms`]).
+    pub fn rooms_toml(&self, description: &str) -> String {
+        let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x524f_4f4d);
+        let keep = self.keep_clear_m();
+        let [w, h] = self.size;
+        let xs = Self::wall_lines(&mut rng, w, [self.start[0], self.goal[0]], keep);
+        let ys = Self::wall_lines(&mut rng, h, [self.start[1], self.goal[1]], keep);
+        // Room (i, j) spans edges[i]..edges[i + 1] across and likewise up.
+        let edges = |lines: &[f64], end: f64| {
+            let mut e = vec![0.0];
+            e.extend_from_slice(lines);
+            e.push(end);
+            e
+        };
+        let (ex, ey) = (edges(&xs, w), edges(&ys, h));
+        let (nx, ny) = (ex.len() - 1, ey.len() - 1);
+        // The walls between neighbours: (room a, room b), rooms numbered
+        // i + nx·j. A random spanning tree by a random walk's first visits
+        // (Aldous–Broder), so that every room is joined.
+        let room = |i: usize, j: usize| i + nx * j;
+        let mut walls: Vec<(usize, usize)> = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                if i + 1 < nx {
+                    walls.push((room(i, j), room(i + 1, j)));
+                }
+                if j + 1 < ny {
+                    walls.push((room(i, j), room(i, j + 1)));
+                }
+            }
+        }
+        let mut door = vec![false; walls.len()];
+        let mut seen = vec![false; nx * ny];
+        let mut at = rng.gen_range(0..nx * ny);
+        seen[at] = true;
+        let mut left = nx * ny - 1;
+        while left > 0 {
+            let next: Vec<usize> = (0..walls.len())
+                .filter(|&k| walls[k].0 == at || walls[k].1 == at)
+                .collect();
+            let k = next[rng.gen_range(0..next.len())];
+            let to = if walls[k].0 == at {
+                walls[k].1
+            } else {
+                walls[k].0
+            };
+            if !seen[to] {
+                seen[to] = true;
+                door[k] = true;
+                left -= 1;
+            }
+            at = to;
+        }
+        for d in door.iter_mut() {
+            if !*d && rng.gen_bool(EXTRA_DOORS) {
+                *d = true;
+            }
+        }
+        // Each wall as boxes with a gap at its door: a wall between rooms
+        // side by side is upright, at the left room's right edge.
+        let mut shapes: Vec<TurnedBox> = Vec::new();
+        let mut doors: Vec<[f64; 2]> = Vec::new();
+        let t = WALL_THICKNESS / 2.0;
+        for (k, &(a, b)) in walls.iter().enumerate() {
+            let (i, j) = (a % nx, a / nx);
+            let upright = b == a + 1;
+            // The wall's fixed coordinate and its span along the other axis.
+            let (at, lo, hi) = if upright {
+                (ex[i + 1], ey[j], ey[j + 1])
+            } else {
+                (ey[j + 1], ex[i], ex[i + 1])
+            };
+            let piece = |from: f64, to: f64| {
+                let (mid, half) = ((from + to) / 2.0, (to - from) / 2.0 + t);
+                if upright {
+                    TurnedBox {
+                        c: [at, mid],
+                        half: [t, half],
+                        turn: 0.0,
+                    }
+                } else {
+                    TurnedBox {
+                        c: [mid, at],
+                        half: [half, t],
+                        turn: 0.0,
+                    }
+                }
+            };
+            if door[k] {
+                let width = rng.gen_range(DOOR_WIDTHS[0]..=DOOR_WIDTHS[1]);
+                let from = rng.gen_range(lo + DOOR_FROM_ENDS..=hi - DOOR_FROM_ENDS - width);
+                shapes.push(piece(lo, from));
+                shapes.push(piece(from + width, hi));
+                let mid = from + width / 2.0;
+                doors.push(if upright { [at, mid] } else { [mid, at] });
+            } else {
+                shapes.push(piece(lo, hi));
+            }
+        }
+        let head = self.header(description);
+        let comment = format!(
+            "# generated: seed {}, {nx} × {ny} rooms, {} doorways, up to {FURNITURE} boxes of furniture a room\n",
+            self.seed,
+            doors.len()
+        );
+        loop {
+            let mut furniture: Vec<TurnedBox> = Vec::new();
+            for j in 0..ny {
+                for i in 0..nx {
+                    for _ in 0..rng.gen_range(0..=FURNITURE) {
+                        let b = TurnedBox {
+                            c: [
+                                rng.gen_range(ex[i]..ex[i + 1]),
+                                rng.gen_range(ey[j]..ey[j + 1]),
+                            ],
+                            half: [
+                                rng.gen_range(FURNITURE_SIDES[0]..=FURNITURE_SIDES[1]) / 2.0,
+                                rng.gen_range(FURNITURE_SIDES[0]..=FURNITURE_SIDES[1]) / 2.0,
+                            ],
+                            turn: rng.gen_range(0.0..PI),
+                        };
+                        let clear = b.distance(self.start) > keep
+                            && b.distance(self.goal) > keep
+                            && doors.iter().all(|&d| b.distance(d) > FURNITURE_FROM_DOORS);
+                        if clear {
+                            furniture.push(b);
+                        }
+                    }
+                }
+            }
+            let text = format!(
+                "{head}{comment}{}{}",
+                polygons_text(&shapes),
+                polygons_text(&furniture)
+            );
+            if let Ok(sc) = Scenario::parse(&text, Path::new(&self.name)) {
+                if reachable(&sc) == Some(true) {
+                    return text;
+                }
+            }
+        }
+    }
+}
+
 /// Whether the robot can reach the goal: `Some(true)` when the reference
 /// finds a path, `Some(false)` when it finds none even for a disc whose
 /// radius is [`UNSOLVABLE_MARGIN_M`] smaller, `None` between the two (the
@@ -381,6 +558,20 @@ pub fn reachable(sc: &Scenario) -> Option<bool> {
         ..sc.clone()
     };
     shortest_path(&narrower).is_none().then_some(false)
+}
+
+/// The boxes as the file's `[[polygon]]` tables, corners in millimetres.
+fn polygons_text(boxes: &[TurnedBox]) -> String {
+    let mut body = String::new();
+    for b in boxes {
+        let points: Vec<String> = b
+            .corners()
+            .iter()
+            .map(|p| format!("[{:.3}, {:.3}]", p[0], p[1]))
+            .collect();
+        let _ = writeln!(body, "\n[[polygon]]\npoints = [{}]", points.join(", "));
+    }
+    body
 }
 
 /// A rectangle turned by `turn` (rad) about its centre `c`, m.
@@ -506,6 +697,36 @@ mod tests {
                     );
                 }
             }
+        }
+    }
+
+    #[test]
+    fn floors_are_rooms_joined_by_doorways_with_every_goal_reachable() {
+        for seed in 1..=3 {
+            let text = generated(Kind::Rooms, seed);
+            let sc = parsed(&text);
+            assert!(sc.solvable);
+            assert_eq!(reachable(&sc), Some(true), "seed {seed}");
+            for p in [START, GOAL] {
+                assert_kept_clear(&sc, p, seed);
+            }
+            // "N × M rooms, D doorways": a spanning tree's doors at least.
+            let comment = text.lines().find(|l| l.starts_with("# generated")).unwrap();
+            let words: Vec<&str> = comment.split_whitespace().collect();
+            let at = words.iter().position(|w| *w == "rooms,").unwrap();
+            let (nx, ny): (usize, usize) = (
+                words[at - 3].parse().unwrap(),
+                words[at - 1].parse().unwrap(),
+            );
+            let doors: usize = words[at + 1].parse().unwrap();
+            assert!(nx >= 4 && ny >= 3, "seed {seed}: {nx} × {ny}");
+            assert!(doors >= nx * ny - 1, "seed {seed}: {doors} doorways");
+            // Without the doorways (a disc too wide for the widest), no way.
+            let wide = Scenario {
+                robot_radius: DOOR_WIDTHS[1] / 2.0 + 0.01,
+                ..sc.clone()
+            };
+            assert!(shortest_path(&wide).is_none(), "seed {seed}");
         }
     }
 
