@@ -312,13 +312,16 @@ impl Track {
             let a = t0 + (t1 - t0) * k as f64 / pieces as f64;
             let b = t0 + (t1 - t0) * (k + 1) as f64 / pieces as f64;
             let piece = world.moving_sweep_clearance(p, p, a, b);
-            if piece <= r && self.contact.is_none() {
+            c = c.min(piece);
+            if piece <= r {
+                // The run ends here: the trace ends at this piece's end.
                 self.contact = Some(Contact {
                     with: Touched::first_in(world, (p, p), (a, b), heading, r),
                     standing: true,
                 });
+                self.row(b, p, heading);
+                break;
             }
-            c = c.min(piece);
         }
         self.min_clear = self.min_clear.min(c - r);
         c
@@ -690,6 +693,26 @@ speed = 2.0
             // It was struck on the spot: the rover had not driven.
             assert_eq!(res.path_length, 0.0, "{planner:?}");
         }
+    }
+
+    #[test]
+    fn the_picture_of_a_collision_says_what_reached_the_rover_and_shows_where() {
+        let sc = Scenario::parse(STRUCK_WHILE_TURNING, Path::new("struck.toml")).unwrap();
+        let res = run(&sc, &SimConfig::default(), None);
+        let pic = crate::svg::render(&sc, &res, "eapf", None, None);
+        assert!(pic.contains("collision (mover-beside while standing)"));
+        // The circle where it was at the end: on the rover, which stood at
+        // the start, drawn at its 0.2 m radius (SVG y grows downwards).
+        let t_end = res.trace.last().unwrap().t;
+        let end = World::from_scenario(&sc).moving[0].center_at(t_end);
+        assert!(end.dist(V2::new(1.0, 2.0)) <= 0.3, "{end:?}");
+        let scale = 900.0 / 6.0;
+        let (cx, cy) = ((end.x * scale), ((4.0 - end.y) * scale + 86.0));
+        let ring = format!(
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="#8c959f""##,
+            0.2 * scale
+        );
+        assert!(pic.contains(&ring), "{ring}");
     }
 
     #[test]

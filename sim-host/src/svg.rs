@@ -61,9 +61,14 @@ pub fn render(
         "unreachable" => "#9a6700",
         _ => "#6e7781",
     };
+    // A collision says what the disc touched, and whether it was driving.
+    let contact = run
+        .contact
+        .map(|c| format!(" ({})", c.describe()))
+        .unwrap_or_default();
     let _ = writeln!(
         s,
-        r##"<text x="10" y="24" font-size="18" font-weight="bold">{} — {planner}: <tspan fill="{colour}">{}</tspan></text>"##,
+        r##"<text x="10" y="24" font-size="18" font-weight="bold">{} — {planner}: <tspan fill="{colour}">{}{contact}</tspan></text>"##,
         xml(&sc.name),
         run.outcome.as_str()
     );
@@ -115,12 +120,29 @@ pub fn render(
             pts.join(" ")
         );
     }
-    for m in &sc.moving {
-        let (cx, cy) = px(V2::new(m.center[0], m.center[1]));
+    // Moving circles: their runs (thin dashes), where they began (a
+    // dashed ring) and where they were when the run ended (grey), so that
+    // a picture of a collision shows what reached the rover.
+    let t_end = run.trace.last().map_or(0.0, |r| r.t);
+    let movers = crate::world::World::from_scenario(sc).moving;
+    for (m, moving) in sc.moving.iter().zip(&movers) {
+        let mut way = vec![V2::new(m.center[0], m.center[1])];
+        way.extend(m.waypoints.iter().map(|w| V2::new(w[0], w[1])));
         let _ = writeln!(
             s,
-            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="none" stroke="#57606a" stroke-dasharray="4 3"/>"##,
-            m.radius * scale
+            r##"<polyline points="{}" fill="none" stroke="#57606a" stroke-width="1" stroke-dasharray="2 3"/>"##,
+            poly(&way, &px)
+        );
+        let (cx, cy) = px(way[0]);
+        let r = m.radius * scale;
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{r:.1}" fill="none" stroke="#57606a" stroke-dasharray="4 3"/>"##
+        );
+        let (ex, ey) = px(moving.center_at(t_end));
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{ex:.1}" cy="{ey:.1}" r="{r:.1}" fill="#8c959f" fill-opacity="0.6" stroke="#57606a"/>"##
         );
     }
     // Virtual obstacles.
