@@ -35,7 +35,8 @@ pub enum Kind {
     /// goal). The reference ignores them: only the static world decides
     /// what is reachable.
     Moving,
-    /// An indoor floor: the arena cut into rooms 2.4–4.2 m across by thin
+    /// An indoor floor: the arena cut into rooms 2.4–4.2 m across (the last
+    /// in a row or column up to 6.6 m: what is left) by thin
     /// walls, each room joined to the next through doorways 0.45–0.9 m
     /// wide (a door on every wall of a random spanning tree of the rooms,
     /// and on a third of the rest), with up to three turned boxes of
