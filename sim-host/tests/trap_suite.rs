@@ -313,18 +313,29 @@ fn known_collision_box_runs(set_back: bool) -> Vec<(String, u64, Outcome)> {
 /// run with its seed and the sensors on the rim or `set_back`: each run's
 /// name, seed and outcome.
 fn box_runs(runs: &[(u64, u64)], set_back: bool) -> Vec<(String, u64, Outcome)> {
-    use sim_host::generate::{world, Kind};
+    generated_runs(sim_host::generate::Kind::Boxes, runs, set_back)
+}
+
+/// [`box_runs`] for generated worlds of any `kind` (each
+/// `<prefix>-<world seed>`).
+fn generated_runs(
+    kind: sim_host::generate::Kind,
+    runs: &[(u64, u64)],
+    set_back: bool,
+) -> Vec<(String, u64, Outcome)> {
+    use sim_host::generate::world;
     let dir = std::env::temp_dir().join(format!(
-        "boxes-{set_back}-{}-{}",
+        "{}-{set_back}-{}-{}",
+        kind.prefix(),
         std::process::id(),
         runs[0].0
     ));
     std::fs::create_dir_all(&dir).unwrap();
     let mut out = Vec::new();
     for &(world_seed, seed) in runs {
-        let name = format!("box-{world_seed}");
+        let name = format!("{}-{world_seed}", kind.prefix());
         let file = dir.join(format!("{name}.toml"));
-        let text = world(Kind::Boxes, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
+        let text = world(kind, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
         std::fs::write(&file, text).unwrap();
         let cfg = SimConfig {
             seed,
@@ -378,6 +389,22 @@ fn set_back_sensors_keep_off_the_known_box_world_collisions() {
     for (name, seed, outcome) in known_collision_box_runs(true) {
         println!("{name} seed {seed}, sensors set back: {}", outcome.as_str());
         assert_ne!(outcome, Outcome::Collision, "{name} with seed {seed}");
+    }
+}
+
+/// Indoor floors (`gen --kind rooms --seed 1`) whose reachable goal is
+/// reported unreachable with seed 1. In rooms-19 the follower passes a
+/// doorway beside its hit point and counts that as a loop round the
+/// boundary, twice (docs/bench.md, "Indoor floors"); rooms-22 and rooms-26
+/// were not traced. Ignored until a rule mends them:
+/// `cargo test --release -p sim-host --test trap_suite -- --ignored` runs
+/// them.
+#[test]
+#[ignore = "reported unreachable: docs/bench.md, Indoor floors"]
+fn indoor_floor_goals_wrongly_reported_unreachable() {
+    let runs = [(19, 1), (22, 1), (26, 1)];
+    for (name, seed, outcome) in generated_runs(sim_host::generate::Kind::Rooms, &runs, false) {
+        assert_eq!(outcome, Outcome::Reached, "{name} with seed {seed}");
     }
 }
 
