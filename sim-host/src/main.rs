@@ -99,8 +99,8 @@ enum Cmd {
         runs: bool,
     },
     /// Write a random world in the paper's environment 2 arena: circles
-    /// with its parameters, or turned boxes and walls, walled in or not
-    /// (`--kind`).
+    /// with its parameters, turned boxes and walls, walled in or not,
+    /// circles with moving ones, or an indoor floor of rooms (`--kind`).
     Gen {
         /// Output file (with `--count`, a folder).
         out: PathBuf,
@@ -108,8 +108,8 @@ enum Cmd {
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Write this many worlds, seeds SEED, SEED+1, …, into the folder
-        /// OUT as `gen-<seed>.toml`: a set of worlds no rule was tuned on,
-        /// for `bench`.
+        /// OUT as `gen-<seed>.toml` (other kinds: below): a set of worlds
+        /// no rule was tuned on, for `bench`.
         #[arg(long, value_parser = clap::value_parser!(u64).range(1..))]
         count: Option<u64>,
         /// Start x y.
@@ -120,9 +120,11 @@ enum Cmd {
         goal: Vec<f64>,
         /// What the world is made of: `circles` (the paper's environment
         /// 2), `boxes` (turned boxes and thin walls; with `--count` named
-        /// `box-<seed>.toml`), or `walled` (a box world with a closed ring
+        /// `box-<seed>.toml`), `walled` (a box world with a closed ring
         /// of walls round the goal or the start: unsolvable;
-        /// `walled-<seed>.toml`).
+        /// `walled-<seed>.toml`), `moving` (the circle world and six
+        /// circles moving across the way; `mov-<seed>.toml`) or `rooms`
+        /// (rooms, doorways and furniture; `rooms-<seed>.toml`).
         #[arg(long, value_enum, default_value = "circles")]
         kind: generate::Kind,
     },
