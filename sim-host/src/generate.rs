@@ -419,8 +419,7 @@ impl RandomWorld {
         let (ex, ey) = (edges(&xs, w), edges(&ys, h));
         let (nx, ny) = (ex.len() - 1, ey.len() - 1);
         // The walls between neighbours: (room a, room b), rooms numbered
-        // i + nx·j. A random spanning tree by a random walk's first visits
-        // (Aldous–Broder), so that every room is joined.
+        // i + nx·j.
         let room = |i: usize, j: usize| i + nx * j;
         let mut walls: Vec<(usize, usize)> = Vec::new();
         for j in 0..ny {
@@ -433,33 +432,7 @@ impl RandomWorld {
                 }
             }
         }
-        let mut door = vec![false; walls.len()];
-        let mut seen = vec![false; nx * ny];
-        let mut at = rng.gen_range(0..nx * ny);
-        seen[at] = true;
-        let mut left = nx * ny - 1;
-        while left > 0 {
-            let next: Vec<usize> = (0..walls.len())
-                .filter(|&k| walls[k].0 == at || walls[k].1 == at)
-                .collect();
-            let k = next[rng.gen_range(0..next.len())];
-            let to = if walls[k].0 == at {
-                walls[k].1
-            } else {
-                walls[k].0
-            };
-            if !seen[to] {
-                seen[to] = true;
-                door[k] = true;
-                left -= 1;
-            }
-            at = to;
-        }
-        for d in door.iter_mut() {
-            if !*d && rng.gen_bool(EXTRA_DOORS) {
-                *d = true;
-            }
-        }
+        let door = doors_of(&mut rng, &walls, nx * ny);
         // Each wall as boxes with a gap at its door: a wall between rooms
         // side by side is upright, at the left room's right edge.
         let mut shapes: Vec<TurnedBox> = Vec::new();
@@ -559,6 +532,42 @@ pub fn reachable(sc: &Scenario) -> Option<bool> {
         ..sc.clone()
     };
     shortest_path(&narrower).is_none().then_some(false)
+}
+
+/// Which of the `walls` between `rooms` rooms (each a pair of room numbers)
+/// get a doorway: every wall of a random spanning tree, found by a random
+/// walk's first visits to each room (Aldous–Broder: every tree equally
+/// likely), so that every room is joined; then each other wall with the
+/// chance [`EXTRA_DOORS`].
+fn doors_of(rng: &mut Pcg64, walls: &[(usize, usize)], rooms: usize) -> Vec<bool> {
+    let mut door = vec![false; walls.len()];
+    let mut seen = vec![false; rooms];
+    let mut at = rng.gen_range(0..rooms);
+    seen[at] = true;
+    let mut left = rooms - 1;
+    while left > 0 {
+        let next: Vec<usize> = (0..walls.len())
+            .filter(|&k| walls[k].0 == at || walls[k].1 == at)
+            .collect();
+        let k = next[rng.gen_range(0..next.len())];
+        let to = if walls[k].0 == at {
+            walls[k].1
+        } else {
+            walls[k].0
+        };
+        if !seen[to] {
+            seen[to] = true;
+            door[k] = true;
+            left -= 1;
+        }
+        at = to;
+    }
+    for d in door.iter_mut() {
+        if !*d && rng.gen_bool(EXTRA_DOORS) {
+            *d = true;
+        }
+    }
+    door
 }
 
 /// The boxes as the file's `[[polygon]]` tables, corners in millimetres.
@@ -728,6 +737,43 @@ mod tests {
                 ..sc.clone()
             };
             assert!(shortest_path(&wide).is_none(), "seed {seed}");
+        }
+    }
+
+    #[test]
+    fn the_doorways_join_every_room() {
+        // A 4 × 3 grid of rooms: the walls between neighbours.
+        let (nx, ny) = (4, 3);
+        let mut walls = Vec::new();
+        for j in 0..ny {
+            for i in 0..nx {
+                if i + 1 < nx {
+                    walls.push((i + nx * j, i + 1 + nx * j));
+                }
+                if j + 1 < ny {
+                    walls.push((i + nx * j, i + nx * (j + 1)));
+                }
+            }
+        }
+        for seed in 0..50 {
+            let door = doors_of(&mut Pcg64::seed_from_u64(seed), &walls, nx * ny);
+            // Through doorways only, from room 0 every room is reached.
+            let mut reached = vec![false; nx * ny];
+            reached[0] = true;
+            let mut grew = true;
+            while grew {
+                grew = false;
+                for (k, &(a, b)) in walls.iter().enumerate() {
+                    if door[k] && reached[a] != reached[b] {
+                        reached[a] = true;
+                        reached[b] = true;
+                        grew = true;
+                    }
+                }
+            }
+            assert!(reached.iter().all(|&r| r), "seed {seed}");
+            // A tree has rooms − 1 walls; the rest are extra doors.
+            assert!(door.iter().filter(|&&d| d).count() >= nx * ny - 1);
         }
     }
 
