@@ -576,6 +576,35 @@ mod tests {
         );
     }
 
+    /// The collisions count is split by what reached the rover only where
+    /// a moving circle did; a still world's collision adds nothing to the
+    /// line, and a row written before contacts were recorded reads back
+    /// without one.
+    #[test]
+    fn the_totals_name_the_movers_that_reached_the_rover() {
+        let struck = |with, standing| Some(Contact { with, standing });
+        let mut rows = vec![
+            row("a", "w1", 1, Outcome::Collision, 1.0),
+            row("a", "w2", 1, Outcome::Collision, 1.0),
+            row("a", "w3", 1, Outcome::Collision, 1.0),
+            row("a", "w4", 1, Outcome::Reached, 1.0),
+        ];
+        rows[0].contact = struck(Touched::Static, false);
+        assert!(table(&rows, true).contains("| collisions 3 | unreachable"));
+        rows[1].contact = struck(Touched::MoverAhead, true);
+        rows[2].contact = struck(Touched::MoverBeside, false);
+        assert!(table(&rows, true)
+            .contains("| collisions 3 (1 with a mover ahead, 1 beside or behind) | unreachable"));
+        let old = r#"{"name":"w","planner":"a","outcome":"reached","steps":1,"path_length":1.0,"reference_length":1.0,"min_clearance":0.1,"virtual_obstacles":0,"solvable":true,"file":"w.toml","seed":1}"#;
+        let back: Row = serde_json::from_str(old).unwrap();
+        assert_eq!(back.contact, None);
+        let line = serde_json::to_string(&rows[2]).unwrap();
+        assert!(
+            line.contains(r#""contact":{"with":"mover-beside","standing":false}"#),
+            "{line}"
+        );
+    }
+
     /// Runs pair by planner, scenario and seed, not by path (two
     /// checkouts' files); the moves are counted each way, the runs only one
     /// side has are left out of both totals, and the ratio where both
