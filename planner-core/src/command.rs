@@ -369,24 +369,30 @@ impl Flank {
         }
     }
 
-    /// Keep `p`, seen with the rover at `centre`: it replaces a kept
-    /// point near it (a beam sliding along a face leaves the last point it
-    /// saw of it) or, all places taken, the kept point farthest from the
-    /// rover if `p` is nearer (the nearest matter: the farthest are the
-    /// first the rover leaves behind).
+    /// Keep `p`, seen with the rover at `centre` ([`keep_near`]).
     fn keep(&mut self, p: Point, centre: Point) {
-        if let Some(q) = self
-            .points
-            .iter_mut()
-            .find(|q| box_within(**q, p, FLANK_MERGE_MM))
-        {
-            *q = p;
-        } else if let Err(p) = self.points.push(p) {
-            let far = |q: &Point| q.x.abs_diff(centre.x).max(q.y.abs_diff(centre.y));
-            if let Some(q) = self.points.iter_mut().max_by_key(|q| far(q)) {
-                if far(&p) < far(q) {
-                    *q = p;
-                }
+        keep_near(&mut self.points, p, centre, FLANK_MERGE_MM);
+    }
+}
+
+/// Keep `p`, seen with the rover at `centre`, among `points`: it replaces
+/// a kept point within `merge_mm` of it (a beam sliding along a face
+/// leaves the last point it saw of it) or, all places taken, the kept
+/// point farthest from the rover if `p` is nearer (the nearest matter: the
+/// farthest are the first the rover leaves behind).
+pub(crate) fn keep_near<const N: usize>(
+    points: &mut heapless::Vec<Point, N>,
+    p: Point,
+    centre: Point,
+    merge_mm: u16,
+) {
+    if let Some(q) = points.iter_mut().find(|q| box_within(**q, p, merge_mm)) {
+        *q = p;
+    } else if let Err(p) = points.push(p) {
+        let far = |q: &Point| q.x.abs_diff(centre.x).max(q.y.abs_diff(centre.y));
+        if let Some(q) = points.iter_mut().max_by_key(|q| far(q)) {
+            if far(&p) < far(q) {
+                *q = p;
             }
         }
     }

@@ -62,6 +62,7 @@ pub mod follow;
 pub mod forces;
 pub mod liquid;
 pub mod memory;
+pub mod peers;
 pub mod protocol;
 pub mod ring;
 pub mod route;
@@ -74,6 +75,58 @@ pub use fixed::{Angle, Dir, Force, Point};
 pub use sensors::{
     AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
 };
+
+/// A planner the rover's executor drives, whatever it decides by: each
+/// cycle the pose and the five raw counts in, a command and a status out;
+/// during the advance the guard, with fresh counts and the part of the
+/// step still to go. The product planner ([`Planner`]), the baseline
+/// ([`apf::ApfPlanner`]), the route layer ([`route::RoutePlanner`]) and
+/// the peers ([`peers`]) all are, so that one executor and one simulator
+/// run them all.
+pub trait Navigator {
+    /// One cycle from raw ADC counts.
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output;
+    /// The guard during an advance.
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard;
+    /// The rover's configuration.
+    fn config(&self) -> &Config;
+}
+
+impl Navigator for Planner {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        Planner::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        Planner::guard_raw(self, raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        Planner::config(self)
+    }
+}
+
+impl Navigator for apf::ApfPlanner {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        apf::ApfPlanner::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        apf::ApfPlanner::guard_raw(self, raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        apf::ApfPlanner::config(self)
+    }
+}
+
+impl<const N: usize, const E: usize> Navigator for route::RoutePlanner<N, E> {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        route::RoutePlanner::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        route::RoutePlanner::guard_raw(self, raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        self.planner().config()
+    }
+}
 
 use fixed::{box_within, hypot};
 use follow::FollowVerdict;

@@ -43,6 +43,11 @@ pub struct Row {
     /// before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub contact: Option<Contact>,
+    /// Simulated time (s, turns and stands included) over the time the
+    /// reference takes at cruise speed, for reached runs with a reference
+    /// (absent from rows written before it was recorded).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time_ratio: Option<f64>,
 }
 
 impl Row {
@@ -52,6 +57,26 @@ impl Row {
             (Outcome::Reached, Some(r)) if r > 0.0 => Some(self.path_length / r),
             _ => None,
         }
+    }
+
+    /// The run's term of SPL (success weighted by path length, Anderson et
+    /// al. 2018): S·ℓ/max(p, ℓ), S = 1 if reached, ℓ the reference, p the
+    /// driven length; `None` for a run SPL does not count (an unsolvable
+    /// world, or one without a reference).
+    pub fn spl(&self) -> Option<f64> {
+        match (self.solvable, self.reference_length) {
+            (true, Some(l)) if l > 0.0 => Some(if self.outcome == Outcome::Reached {
+                l / self.path_length.max(l)
+            } else {
+                0.0
+            }),
+            _ => None,
+        }
+    }
+
+    /// Whether a reachable goal was reported unreachable.
+    pub fn wrongly_unreachable(&self) -> bool {
+        self.solvable && self.outcome == Outcome::Unreachable
     }
 
     /// Whether the outcome is the right one: reached when solvable,
@@ -133,6 +158,27 @@ fn run_loaded(
         ProgressStyle::with_template("{bar:40} {pos}/{len} {elapsed_precise} {msg}")
             .unwrap_or_else(|_| ProgressStyle::default_bar()),
     );
+    let out = run_with(scenarios, cfg, &bar, pictures);
+    bar.finish_and_clear();
+    out
+}
+
+/// The runs of `scenarios` with `cfg`, sorted by file, counted on `bar`
+/// (the caller's: one bar over several calls).
+pub fn run_scenarios(
+    scenarios: &[(PathBuf, Scenario)],
+    cfg: &SimConfig,
+    bar: &ProgressBar,
+) -> Vec<Row> {
+    run_with(scenarios, cfg, bar, None).0
+}
+
+fn run_with(
+    scenarios: &[(PathBuf, Scenario)],
+    cfg: &SimConfig,
+    bar: &ProgressBar,
+    pictures: Option<(&Path, u16)>,
+) -> (Vec<Row>, Option<String>) {
     let failed: Mutex<Option<String>> = Mutex::new(None);
     let mut rows: Vec<Row> = scenarios
         .par_iter()
@@ -168,10 +214,13 @@ fn run_loaded(
                 file: file.clone(),
                 seed: cfg.seed,
                 contact: res.contact,
+                time_ratio: match (res.outcome, refl) {
+                    (Outcome::Reached, Some(l)) if l > 0.0 => Some(res.duration_s * cfg.speed / l),
+                    _ => None,
+                },
             }
         })
         .collect();
-    bar.finish_and_clear();
     rows.sort_by(|a, b| a.file.cmp(&b.file));
     (rows, failed.into_inner().unwrap_or_else(|p| p.into_inner()))
 }
@@ -200,6 +249,12 @@ pub struct Totals {
     pub mean_ratio: Option<f64>,
     /// Reached runs within 1.25× the reference.
     pub within_125: usize,
+    /// Reachable goals reported unreachable.
+    pub wrongly_unreachable: usize,
+    /// SPL over the runs it counts ([`Row::spl`]).
+    pub spl: Option<f64>,
+    /// Mean time ratio over reached runs with a reference.
+    pub time_ratio: Option<f64>,
 }
 
 /// Sum up.
@@ -238,7 +293,21 @@ pub fn totals(rows: &[Row]) -> Totals {
             .count(),
         mean_ratio: (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64),
         within_125: ratios.iter().filter(|&&r| r <= 1.25).count(),
+        wrongly_unreachable: rows.iter().filter(|r| r.wrongly_unreachable()).count(),
+        spl: mean(rows.iter().filter_map(Row::spl)),
+        time_ratio: mean(rows.iter().filter_map(|r| r.time_ratio)),
     }
+}
+
+/// The mean of `values`; `None` when there are none.
+fn mean(values: impl Iterator<Item = f64>) -> Option<f64> {
+    let (sum, n) = values.fold((0.0, 0usize), |(s, n), v| (s + v, n + 1));
+    (n > 0).then(|| sum / n as f64)
+}
+
+/// A figure with three decimals, or "–" where there is none.
+fn fig(v: Option<f64>) -> String {
+    v.map_or_else(|| "–".into(), |v| format!("{v:.3}"))
 }
 
 /// The table: one row per scenario (unless `summary_only`), then totals.
@@ -290,7 +359,7 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
     };
     let _ = writeln!(
         s,
-        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {}{movers} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{}{split}",
+        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {}{movers} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{} | SPL {} | time ratio {}{split}",
         t.runs,
         t.reached,
         t.solvable,
@@ -302,7 +371,9 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
         t.timeouts,
         t.mean_ratio.map(|r| format!("{r:.3}")).unwrap_or_else(|| "–".into()),
         t.within_125,
-        t.reached
+        t.reached,
+        fig(t.spl),
+        fig(t.time_ratio)
     );
     s
 }
@@ -353,9 +424,9 @@ pub fn comparison(rows: &[Row]) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "| planner | runs | reached | collisions | unreachable (of unsolvable) | timeouts | mean path ratio | within 1.25x | ratio where all reached |"
+        "| planner | runs | reached | collisions | unreachable (of unsolvable) | wrongly unreachable | timeouts | SPL | mean path ratio | time ratio | within 1.25x | ratio where all reached |"
     );
-    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|");
+    let _ = writeln!(s, "|---|---|---|---|---|---|---|---|---|---|---|---|");
     for p in planners.iter().copied() {
         let theirs: Vec<Row> = rows.iter().filter(|r| r.planner == p).cloned().collect();
         let t = totals(&theirs);
@@ -366,7 +437,7 @@ pub fn comparison(rows: &[Row]) -> String {
             .collect();
         let _ = writeln!(
             s,
-            "| {p} | {} | {}/{} | {} | {} ({}/{}) | {} | {} | {}/{} | {} ({} runs) |",
+            "| {p} | {} | {}/{} | {} | {} ({}/{}) | {} | {} | {} | {} | {} | {}/{} | {} ({} runs) |",
             t.runs,
             t.reached,
             t.solvable,
@@ -374,10 +445,11 @@ pub fn comparison(rows: &[Row]) -> String {
             t.unreachable,
             t.unreachable_correct,
             t.runs - t.solvable,
+            t.wrongly_unreachable,
             t.timeouts,
-            t.mean_ratio
-                .map(|r| format!("{r:.3}"))
-                .unwrap_or_else(|| "–".into()),
+            fig(t.spl),
+            fig(t.mean_ratio),
+            fig(t.time_ratio),
             t.within_125,
             t.reached,
             if shared.is_empty() {
@@ -525,6 +597,7 @@ mod tests {
             file: file.into(),
             seed,
             contact: None,
+            time_ratio: None,
         }
     }
 
@@ -543,14 +616,16 @@ mod tests {
         ];
         let table = comparison(&rows);
         let lines: Vec<&str> = table.lines().collect();
+        // SPL: a (1/1.1 + 1/3 + 1/1.3) / 3 = 0.671; b (1/1.2 + 0 + 1/1.5)
+        // / 3 = 0.500.
         assert_eq!(lines.len(), 4, "{table}");
         assert_eq!(
             lines[2],
-            "| a | 3 | 3/3 | 0 | 0 (0/0) | 0 | 1.800 | 1/3 | 1.200 (2 runs) |"
+            "| a | 3 | 3/3 | 0 | 0 (0/0) | 0 | 0 | 0.671 | 1.800 | – | 1/3 | 1.200 (2 runs) |"
         );
         assert_eq!(
             lines[3],
-            "| b | 3 | 2/3 | 0 | 0 (0/0) | 1 | 1.350 | 1/2 | 1.350 (2 runs) |"
+            "| b | 3 | 2/3 | 0 | 0 (0/0) | 0 | 1 | 0.500 | 1.350 | – | 1/2 | 1.350 (2 runs) |"
         );
     }
 
@@ -566,12 +641,13 @@ mod tests {
             row("a", "w4", 1, Outcome::Timeout, 9.0),
         ];
         assert!(!table(&rows, true).contains("virtual obstacles"));
+        // SPL (1 + 1/1.4 + 1/2 + 0) / 4 = 0.554.
         rows[2].virtual_obstacles = 3;
         rows[3].virtual_obstacles = 5;
         assert_eq!(
             table(&rows, true),
             "runs 4 | reached 3/4 solvable (75.0%) | collisions 0 | unreachable 0 (0 of 0 unsolvable) \
-             | timeouts 1 | mean path ratio 1.467 | within 1.25x 1/3 | ratio without virtual obstacles \
+             | timeouts 1 | mean path ratio 1.467 | within 1.25x 1/3 | SPL 0.554 | time ratio – | ratio without virtual obstacles \
              1.200 (1/2 within 1.25x), with them 2.000 (0/1)\n"
         );
     }

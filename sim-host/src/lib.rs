@@ -17,6 +17,7 @@ pub mod generate;
 pub mod geom;
 pub mod planners;
 pub mod reference;
+pub mod results;
 pub mod routemap;
 pub mod scenario;
 pub mod sensor;

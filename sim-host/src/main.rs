@@ -5,7 +5,7 @@ use sim_host::planners::PlannerKind;
 use sim_host::scenario::{collect, Scenario};
 use sim_host::sensor::SensorMode;
 use sim_host::sim::{self, SimConfig};
-use sim_host::{bench, generate, reference, svg};
+use sim_host::{bench, generate, reference, results, svg};
 use std::path::PathBuf;
 use std::process::ExitCode;
 
@@ -127,6 +127,37 @@ enum Cmd {
         /// (rooms, doorways and furniture; `rooms-<seed>.toml`).
         #[arg(long, value_enum, default_value = "circles")]
         kind: generate::Kind,
+    },
+    /// Write the results page: every planner on every set (BARN,
+    /// BARN-tight, the library, the examples and COUNT generated worlds of
+    /// each kind), one table per set and one overall, ranked by SPL, and
+    /// one picture per set with every planner's path.
+    Results {
+        /// The page to write; the pictures go into `results/` beside it.
+        #[arg(long, default_value = "docs/results.md")]
+        out: PathBuf,
+        /// The folder that holds the shared sets (`barn`, `barn-tight`,
+        /// `examples`).
+        #[arg(long, default_value = "../shared/scenarios")]
+        shared: PathBuf,
+        /// The scenario library.
+        #[arg(long, default_value = "sim-host/scenarios")]
+        library: PathBuf,
+        /// Generated worlds of each kind.
+        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        count: u64,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
+        seeds: u64,
+        /// Planners (default: all).
+        #[arg(long, value_enum, value_delimiter = ',')]
+        planner: Vec<PlannerKind>,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        jobs: Option<usize>,
     },
 }
 
@@ -348,6 +379,53 @@ fn real_main(cli: Cli) -> Result<(), String> {
             let b = bench::load_rows(&after)?;
             say(&bench::compare(&a, &b, runs)?)
         }
+        Cmd::Results {
+            out,
+            shared,
+            library,
+            count,
+            seed,
+            seeds,
+            planner,
+            jobs,
+        } => {
+            let mut pool = rayon::ThreadPoolBuilder::new().stack_size(8 << 20);
+            if let Some(j) = jobs {
+                pool = pool.num_threads(j.max(1));
+            }
+            pool.build_global().map_err(|e| e.to_string())?;
+            let planners = if planner.is_empty() {
+                results::PLANNERS.to_vec()
+            } else {
+                planner
+            };
+            let sets = results::sets(&shared, &library, count)?;
+            // A bad output path is an error before anything runs.
+            let pictures = out.with_file_name("results");
+            std::fs::create_dir_all(&pictures)
+                .map_err(|e| format!("{}: {e}", pictures.display()))?;
+            let started = std::time::Instant::now();
+            let rows = results::run(&sets, &planners, seed, seeds, true);
+            let made = results::Provenance {
+                command: std::iter::once("sim-host".to_string())
+                    .chain(std::env::args().skip(1))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                commit: commit(),
+            };
+            let (page, svgs) =
+                results::page(&sets, &rows, &planners, seed, seeds, "results", &made);
+            for (file, svg) in svgs {
+                write(&pictures.join(file), &svg)?;
+            }
+            write(&out, &page)?;
+            let runs: usize = rows.iter().map(Vec::len).sum();
+            say(&format!(
+                "wrote {} ({runs} runs in {:.0} s)\n",
+                out.display(),
+                started.elapsed().as_secs_f64()
+            ))
+        }
         Cmd::Gen {
             out,
             seed,
@@ -386,6 +464,25 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 out.display()
             ))
         }
+    }
+}
+
+/// The commit the tree is at, and whether it has changes beyond it.
+fn commit() -> String {
+    let git = |args: &[&str]| {
+        std::process::Command::new("git")
+            .args(args)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_string())
+    };
+    match git(&["rev-parse", "--short=12", "HEAD"]) {
+        Some(c) => match git(&["status", "--porcelain", "--untracked-files=no"]) {
+            Some(changes) if !changes.is_empty() => format!("`{c}` with uncommitted changes"),
+            _ => format!("`{c}`"),
+        },
+        None => "(not a git checkout)".into(),
     }
 }
 

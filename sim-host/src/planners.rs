@@ -7,9 +7,10 @@ use crate::routemap::{self, ROUTE_EDGES, ROUTE_NODES};
 use crate::scenario::Scenario;
 use planner_core::apf::{ApfConfig, ApfPlanner};
 use planner_core::fixed::Point;
+use planner_core::peers::{Bug2, TangentBug, Vfh};
 use planner_core::route::{RouteConfig, RoutePlanner};
 use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Planner, Pose, RawCounts, Status,
+    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Navigator, Planner, Pose, RawCounts, Status,
 };
 
 /// Planner names for `--planner`.
@@ -31,6 +32,17 @@ pub enum PlannerKind {
     /// safest within 25 % of the shortest), driven by the `eapf` planner
     /// with its sensors leg by leg.
     Route,
+    /// Bug2 (Lumelsky & Stepanov 1987), a peer: the m-line, boundary
+    /// following on a fixed side.
+    Bug2,
+    /// TangentBug (Kamon, Rivlin & Rimon 1998), a peer, on five beams with
+    /// looks by turning on the spot.
+    #[value(name = "tangentbug")]
+    #[serde(rename = "tangentbug")]
+    TangentBug,
+    /// VFH+ (Ulrich & Borenstein 1998), a peer: certainty grid, polar
+    /// histogram, valleys.
+    Vfh,
 }
 
 impl PlannerKind {
@@ -48,6 +60,9 @@ impl PlannerKind {
             PlannerKind::Liquid => "liquid",
             PlannerKind::LiquidOnline => "liquid-online",
             PlannerKind::Route => "route",
+            PlannerKind::Bug2 => "bug2",
+            PlannerKind::TangentBug => "tangentbug",
+            PlannerKind::Vfh => "vfh",
         }
     }
 }
@@ -106,11 +121,13 @@ fn escape_config(kind: PlannerKind) -> EscapeConfig {
     }
 }
 
-/// The core planner behind a [`SimPlanner`].
+/// The core planner behind a [`SimPlanner`]: the product planner and the
+/// route layer (which drives one) are kept as themselves for their
+/// pictures; every other through the trait alone.
 enum Core {
     Eapf(Box<Planner>),
-    Apf(Box<ApfPlanner>),
     Route(Box<RoutePlanner<ROUTE_NODES, ROUTE_EDGES>>),
+    Other(Box<dyn Navigator + Send>),
 }
 
 /// A planner under simulation.
@@ -133,8 +150,11 @@ impl SimPlanner {
         let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
         let core = match kind {
             PlannerKind::Apf => {
-                Core::Apf(Box::new(ApfPlanner::new(cfg, ApfConfig::default(), goal)))
+                Core::Other(Box::new(ApfPlanner::new(cfg, ApfConfig::default(), goal)))
             }
+            PlannerKind::Bug2 => Core::Other(Box::new(Bug2::new(cfg, goal))),
+            PlannerKind::TangentBug => Core::Other(Box::new(TangentBug::new(cfg, goal))),
+            PlannerKind::Vfh => Core::Other(Box::new(Vfh::new(cfg, goal))),
             PlannerKind::Route => {
                 let keep_m = sc.robot_radius + routemap::PREFERRED_MARGIN_M;
                 let route = RouteConfig {
@@ -149,11 +169,19 @@ impl SimPlanner {
         SimPlanner { core }
     }
 
+    fn navigator(&mut self) -> &mut dyn Navigator {
+        match &mut self.core {
+            Core::Eapf(p) => p.as_mut(),
+            Core::Route(p) => p.as_mut(),
+            Core::Other(p) => p.as_mut(),
+        }
+    }
+
     fn config(&self) -> &planner_core::Config {
         match &self.core {
             Core::Eapf(p) => p.config(),
-            Core::Apf(p) => p.config(),
-            Core::Route(p) => p.planner().config(),
+            Core::Route(p) => Navigator::config(p.as_ref()),
+            Core::Other(p) => p.config(),
         }
     }
 
@@ -173,11 +201,7 @@ impl SimPlanner {
             position: to_point(p),
             heading: to_angle(heading),
         };
-        let out = match &mut self.core {
-            Core::Eapf(p) => p.step_raw(pose, raw),
-            Core::Apf(p) => p.step_raw(pose, raw),
-            Core::Route(p) => p.step_raw(pose, raw),
-        };
+        let out = self.navigator().step_raw(pose, raw);
         SimCommand {
             heading: to_rad(out.command.heading),
             step_m: out.command.step_mm as f64 / 1000.0,
@@ -188,12 +212,7 @@ impl SimPlanner {
     /// The guard: may the advance go on for `remaining_m`?
     pub fn guard(&mut self, raw: &RawCounts, remaining_m: f64) -> bool {
         let mm = to_mm(remaining_m);
-        let g = match &mut self.core {
-            Core::Eapf(p) => p.guard_raw(raw, mm),
-            Core::Apf(p) => p.guard_raw(raw, mm),
-            Core::Route(p) => p.guard_raw(raw, mm),
-        };
-        g == planner_core::Guard::Continue
+        self.navigator().guard_raw(raw, mm) == planner_core::Guard::Continue
     }
 
     /// The follower's state for `SIM_DEBUG` (planner `eapf`): off, seek or
@@ -247,7 +266,7 @@ impl SimPlanner {
         match &self.core {
             Core::Eapf(p) => Some(p),
             Core::Route(p) => Some(p.planner()),
-            Core::Apf(_) => None,
+            Core::Other(_) => None,
         }
     }
 
@@ -313,7 +332,12 @@ mod tests {
         for mm in 1..1_000 {
             sc.robot_radius = mm as f64 / 1000.0;
             for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
-                for kind in [PlannerKind::Eapf, PlannerKind::EapfPlain, PlannerKind::Apf] {
+                for kind in [
+                    PlannerKind::Eapf,
+                    PlannerKind::EapfPlain,
+                    PlannerKind::Apf,
+                    PlannerKind::Bug2,
+                ] {
                     for set_back in [false, true] {
                         let p = SimPlanner::new(kind, &sc, adc, set_back);
                         let want = mm.clamp(20, 1_000) as u16;

@@ -216,6 +216,8 @@ pub struct RunResult {
     pub steps: usize,
     /// Driven length, m.
     pub path_length: f64,
+    /// Simulated time at the end, s: turns, pauses and waits included.
+    pub duration_s: f64,
     /// Smallest clearance between the robot's disc and any obstacle, m.
     pub min_clearance: f64,
     /// What the disc touched, when the run ended in a collision.
@@ -334,6 +336,7 @@ impl Track {
             outcome,
             steps,
             path_length: self.length,
+            duration_s: self.trace.last().map_or(0.0, |r| r.t),
             min_clearance: self.min_clear,
             contact: self.contact,
             trace: self.trace,

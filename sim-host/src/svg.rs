@@ -28,32 +28,9 @@ pub fn render(
     reference: Option<&Reference>,
     with_margin: Option<&Reference>,
 ) -> String {
-    let [x0, y0, x1, y1] = sc.bounds;
-    let (w, h) = (x1 - x0, y1 - y0);
-    let scale = MAP_PX / w.max(h);
-    let (pw, ph) = (w * scale, h * scale);
-    // A tall world (BARN's) is narrower than the title, the figures line
-    // and the legend: the picture keeps their width, the map in its middle.
-    let width = pw.max(MAP_PX);
-    let ox = (width - pw) / 2.0;
-    let legend_h = 86.0;
-    let px = |p: V2| ((p.x - x0) * scale + ox, (y1 - p.y) * scale + legend_h);
-    let mut s = String::new();
-    let _ = writeln!(
-        s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{:.0}" viewBox="0 0 {width:.1} {:.1}" font-family="sans-serif">"#,
-        ph + legend_h,
-        ph + legend_h
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect x="0" y="0" width="{width:.1}" height="{:.1}" fill="#fff"/>"##,
-        ph + legend_h
-    );
-    let _ = writeln!(
-        s,
-        r##"<rect x="{ox:.1}" y="{legend_h}" width="{pw:.1}" height="{ph:.1}" fill="#fbfaf7" stroke="#333" stroke-width="3"/>"##
-    );
+    let (mut s, frame) = Frame::open(sc);
+    let (scale, width) = (frame.scale, frame.width);
+    let px = |p: V2| frame.px(p);
     // Title and figures.
     let colour = match run.outcome.as_str() {
         "reached" => "#1a7f37",
@@ -96,30 +73,7 @@ pub fn render(
         r##"<text x="10" y="48" font-size="13" fill="#444">{} steps, path {:.2} m{ratio}, min clearance {:.3} m, {} virtual obstacles</text>"##,
         run.steps, run.path_length, run.min_clearance, run.virtual_dropped
     );
-    // Obstacles.
-    for c in &sc.circle {
-        let (cx, cy) = px(V2::new(c.center[0], c.center[1]));
-        let _ = writeln!(
-            s,
-            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="#8c959f" stroke="#57606a"/>"##,
-            c.radius * scale
-        );
-    }
-    for p in &sc.polygon {
-        let pts: Vec<String> = p
-            .points
-            .iter()
-            .map(|q| {
-                let (a, b) = px(V2::new(q[0], q[1]));
-                format!("{a:.1},{b:.1}")
-            })
-            .collect();
-        let _ = writeln!(
-            s,
-            r##"<polygon points="{}" fill="#8c959f" stroke="#57606a" stroke-width="0.5"/>"##,
-            pts.join(" ")
-        );
-    }
+    frame.obstacles(&mut s, sc);
     // Moving circles: their runs (thin dashes), where they began (a
     // dashed ring) and where they were when the run ended (grey), so that
     // a picture of a collision shows what reached the rover.
@@ -225,18 +179,7 @@ pub fn render(
         );
     }
     // Start, goal, final pose.
-    let (sx, sy) = px(V2::new(sc.start[0], sc.start[1]));
-    let (gx, gy) = px(V2::new(sc.goal[0], sc.goal[1]));
-    let _ = writeln!(
-        s,
-        r##"<circle cx="{sx:.1}" cy="{sy:.1}" r="{:.1}" fill="#2da44e" stroke="#116329" stroke-width="2"/>"##,
-        sc.robot_radius * scale
-    );
-    let _ = writeln!(
-        s,
-        r##"<circle cx="{gx:.1}" cy="{gy:.1}" r="{:.1}" fill="none" stroke="#cf222e" stroke-width="3"/><circle cx="{gx:.1}" cy="{gy:.1}" r="3" fill="#cf222e"/>"##,
-        sc.robot_radius * scale
-    );
+    frame.start_and_goal(&mut s, sc);
     if let Some(last) = run.trace.last() {
         let (a, b) = px(V2::new(last.x, last.y));
         let (hx, hy) = (
@@ -281,6 +224,186 @@ pub fn render(
             s,
             r##"<rect x="{lx:.1}" y="62" width="12" height="12" fill="{c}"/><text x="{:.1}" y="73" font-size="12">{label}</text>"##,
             lx + 16.0
+        );
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+/// Where a world goes in a picture: the map's scale and place under the
+/// title lines and legend.
+struct Frame {
+    scale: f64,
+    width: f64,
+    ox: f64,
+    x0: f64,
+    y1: f64,
+}
+
+/// The height of the title lines and legend above the map, px.
+const LEGEND_H: f64 = 86.0;
+
+impl Frame {
+    /// The document's opening for a picture of `sc`: its size, a white
+    /// background and the map's frame.
+    fn open(sc: &Scenario) -> (String, Frame) {
+        let [x0, y0, x1, y1] = sc.bounds;
+        let (w, h) = (x1 - x0, y1 - y0);
+        let scale = MAP_PX / w.max(h);
+        let (pw, ph) = (w * scale, h * scale);
+        // A tall world (BARN's) is narrower than the title, the figures line
+        // and the legend: the picture keeps their width, the map in its middle.
+        let width = pw.max(MAP_PX);
+        let ox = (width - pw) / 2.0;
+        let legend_h = LEGEND_H;
+        let mut s = String::new();
+        let _ = writeln!(
+            s,
+            r#"<svg xmlns="http://www.w3.org/2000/svg" width="{width:.0}" height="{:.0}" viewBox="0 0 {width:.1} {:.1}" font-family="sans-serif">"#,
+            ph + legend_h,
+            ph + legend_h
+        );
+        let _ = writeln!(
+            s,
+            r##"<rect x="0" y="0" width="{width:.1}" height="{:.1}" fill="#fff"/>"##,
+            ph + legend_h
+        );
+        let _ = writeln!(
+            s,
+            r##"<rect x="{ox:.1}" y="{legend_h}" width="{pw:.1}" height="{ph:.1}" fill="#fbfaf7" stroke="#333" stroke-width="3"/>"##
+        );
+        (
+            s,
+            Frame {
+                scale,
+                width,
+                ox,
+                x0,
+                y1,
+            },
+        )
+    }
+
+    /// World metres to picture pixels.
+    fn px(&self, p: V2) -> (f64, f64) {
+        (
+            (p.x - self.x0) * self.scale + self.ox,
+            (self.y1 - p.y) * self.scale + LEGEND_H,
+        )
+    }
+
+    /// The still obstacles: circles and polygons.
+    fn obstacles(&self, s: &mut String, sc: &Scenario) {
+        let scale = self.scale;
+        for c in &sc.circle {
+            let (cx, cy) = self.px(V2::new(c.center[0], c.center[1]));
+            let _ = writeln!(
+                s,
+                r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="#8c959f" stroke="#57606a"/>"##,
+                c.radius * scale
+            );
+        }
+        for p in &sc.polygon {
+            let pts: Vec<String> = p
+                .points
+                .iter()
+                .map(|q| {
+                    let (a, b) = self.px(V2::new(q[0], q[1]));
+                    format!("{a:.1},{b:.1}")
+                })
+                .collect();
+            let _ = writeln!(
+                s,
+                r##"<polygon points="{}" fill="#8c959f" stroke="#57606a" stroke-width="0.5"/>"##,
+                pts.join(" ")
+            );
+        }
+    }
+
+    /// Start (green disc) and goal (red ring).
+    fn start_and_goal(&self, s: &mut String, sc: &Scenario) {
+        let (sx, sy) = self.px(V2::new(sc.start[0], sc.start[1]));
+        let (gx, gy) = self.px(V2::new(sc.goal[0], sc.goal[1]));
+        let r = sc.robot_radius * self.scale;
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{sx:.1}" cy="{sy:.1}" r="{r:.1}" fill="#2da44e" stroke="#116329" stroke-width="2"/>"##,
+        );
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{gx:.1}" cy="{gy:.1}" r="{r:.1}" fill="none" stroke="#cf222e" stroke-width="3"/><circle cx="{gx:.1}" cy="{gy:.1}" r="3" fill="#cf222e"/>"##,
+        );
+    }
+}
+
+/// One colour per planner in an overlay, in the order given.
+const OVERLAY_COLOURS: [&str; 10] = [
+    "#0550ae", "#cf222e", "#8250df", "#bf8700", "#1a7f37", "#e16f24", "#1b7c83", "#bf3989",
+    "#57606a", "#0a3069",
+];
+
+/// One world with several planners' runs on it: each driven path in its
+/// own colour, the reference path, start and goal, and a legend naming
+/// each planner with its outcome.
+pub fn overlay(
+    sc: &Scenario,
+    runs: &[(&str, &RunResult)],
+    reference: Option<&Reference>,
+) -> String {
+    let (mut s, frame) = Frame::open(sc);
+    let px = |p: V2| frame.px(p);
+    let _ = writeln!(
+        s,
+        r##"<text x="10" y="24" font-size="18" font-weight="bold">{} — every planner</text>"##,
+        xml(&sc.name)
+    );
+    if let Some(r) = reference {
+        let _ = writeln!(
+            s,
+            r##"<text x="10" y="48" font-size="13" fill="#444">reference {:.2} m (green dashes)</text>"##,
+            r.length
+        );
+    }
+    frame.obstacles(&mut s, sc);
+    for m in &sc.moving {
+        let (cx, cy) = px(V2::new(m.center[0], m.center[1]));
+        let _ = writeln!(
+            s,
+            r##"<circle cx="{cx:.1}" cy="{cy:.1}" r="{:.1}" fill="none" stroke="#57606a" stroke-dasharray="4 3"/>"##,
+            m.radius * frame.scale
+        );
+    }
+    if let Some(r) = reference {
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="#2da44e" stroke-width="2" stroke-dasharray="6 4" opacity="0.8"/>"##,
+            poly(&r.path, &px)
+        );
+    }
+    for (i, (_, run)) in runs.iter().enumerate() {
+        let path: Vec<V2> = run.trace.iter().map(|t| V2::new(t.x, t.y)).collect();
+        let _ = writeln!(
+            s,
+            r##"<polyline points="{}" fill="none" stroke="{}" stroke-width="2" stroke-linejoin="round" opacity="0.85"/>"##,
+            poly(&path, &px),
+            OVERLAY_COLOURS[i % OVERLAY_COLOURS.len()]
+        );
+    }
+    frame.start_and_goal(&mut s, sc);
+    // The legend: two rows under the title.
+    let per_row = runs.len().div_ceil(2).max(1);
+    for (i, (name, run)) in runs.iter().enumerate() {
+        let (row, col) = (i / per_row, i % per_row);
+        let lx = 10.0 + col as f64 * (frame.width - 20.0) / per_row as f64;
+        let ly = 56.0 + row as f64 * 16.0;
+        let _ = writeln!(
+            s,
+            r##"<rect x="{lx:.1}" y="{ly:.1}" width="12" height="12" fill="{}"/><text x="{:.1}" y="{:.1}" font-size="12">{} ({})</text>"##,
+            OVERLAY_COLOURS[i % OVERLAY_COLOURS.len()],
+            lx + 16.0,
+            ly + 11.0,
+            xml(name),
+            run.outcome.as_str()
         );
     }
     s.push_str("</svg>\n");

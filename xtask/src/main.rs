@@ -2,7 +2,8 @@
 //! README's test command); `cargo xtask avr-report` and `cargo xtask
 //! stm32-report` print the firmware figures, `cargo xtask avr-profile` and
 //! `cargo xtask stm32-profile` where the AVR step spends its cycles and the
-//! STM32 step its instructions.
+//! STM32 step its instructions; `cargo xtask results` writes
+//! `docs/results.md`, every planner on every set of worlds.
 //!
 //! `ci` installs what it needs on a fresh Debian machine of the project's
 //! kind: rustup targets and components always, Debian packages when it runs
@@ -253,24 +254,25 @@ fn ci() {
     eprintln!("\nxtask ci: all checks passed");
 }
 
-/// Firmware figures, measured now: `avr-report` (simavr) or `stm32-report`
-/// (QEMU), binaries of the tests crate, given the arguments after the task's
-/// name.
-fn report(bin: &str) {
-    let mut args = vec![
-        "+stable",
-        "run",
-        "--quiet",
-        "--release",
-        "-p",
-        "rover-tests",
-        "--bin",
-        bin,
-        "--",
-    ];
+/// `cargo run --release -p PACKAGE ARGS…` with the arguments after the
+/// task's name appended.
+fn cargo_run(args: &[&str]) {
+    let mut all = vec!["+stable", "run", "--quiet", "--release"];
+    all.extend_from_slice(args);
     let extra: Vec<String> = std::env::args().skip(2).collect();
-    args.extend(extra.iter().map(String::as_str));
-    run(&root(), "cargo", &args, &[]);
+    all.extend(extra.iter().map(String::as_str));
+    run(&root(), "cargo", &all, &[]);
+}
+
+/// Firmware figures, measured now: `avr-report` (simavr) or `stm32-report`
+/// (QEMU), binaries of the tests crate.
+fn report(bin: &str) {
+    cargo_run(&["-p", "rover-tests", "--bin", bin, "--"]);
+}
+
+/// The results page: `sim-host results` (every planner on every set).
+fn results() {
+    cargo_run(&["-p", "sim-host", "--", "results"]);
 }
 
 fn main() {
@@ -283,14 +285,16 @@ fn main() {
         "avr-profile" => report("avr-profile"),
         "avr-size" => report("avr-size"),
         "stm32-profile" => report("stm32-profile"),
+        "results" => results(),
         _ => {
             eprintln!(
-                "usage: cargo xtask <ci|cross|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
+                "usage: cargo xtask <ci|cross|results|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
             );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
+            eprintln!("  results       write docs/results.md: every planner on every set (sim-host results)");
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");

@@ -1,0 +1,426 @@
+//! The results page: every planner on every set of worlds the project has,
+//! several seeds, one table per set and one overall, ranked by SPL, and one
+//! picture per set of one world with every planner's path on it. Written
+//! by `sim-host results` (`cargo xtask results`), never by hand.
+
+use crate::bench::{self, Row};
+use crate::generate::{self, Kind};
+use crate::planners::PlannerKind;
+use crate::reference;
+use crate::scenario::{collect, Scenario};
+use crate::sim::{self, SimConfig};
+use crate::svg;
+use indicatif::{ProgressBar, ProgressStyle};
+use std::fmt::Write;
+use std::path::{Path, PathBuf};
+
+/// Every planner the page compares, the product first.
+pub const PLANNERS: [PlannerKind; 9] = [
+    PlannerKind::Eapf,
+    PlannerKind::EapfPlain,
+    PlannerKind::Bug2,
+    PlannerKind::TangentBug,
+    PlannerKind::Vfh,
+    PlannerKind::Apf,
+    PlannerKind::Liquid,
+    PlannerKind::LiquidOnline,
+    PlannerKind::Route,
+];
+
+/// The sensor-only planners the product is measured against.
+pub const PEERS: [PlannerKind; 3] = [PlannerKind::Bug2, PlannerKind::TangentBug, PlannerKind::Vfh];
+
+/// One set of worlds.
+pub struct Set {
+    /// Its name on the page.
+    pub name: String,
+    /// Where it comes from (a folder, or the `gen` command).
+    pub source: String,
+    /// Whether its worlds hold moving circles (reported beside the still
+    /// sets, not in the overall table).
+    pub moving: bool,
+    /// The worlds: a path (for the rows) and the scenario.
+    pub worlds: Vec<(PathBuf, Scenario)>,
+}
+
+/// The generated sets: kind, first seed.
+const GENERATED: [(Kind, &str, u64); 5] = [
+    (Kind::Circles, "circle worlds", 100),
+    (Kind::Boxes, "box worlds", 1),
+    (Kind::Walled, "walled worlds", 1),
+    (Kind::Rooms, "indoor floors", 1),
+    (Kind::Moving, "moving circles", 1),
+];
+
+/// The sets: the shared BARN, BARN-tight and examples (`shared` is the
+/// folder that holds them), the library (`library`), and `count` worlds of
+/// each generated kind, made in memory (the `gen` command's worlds, seeds
+/// as the README gives them).
+pub fn sets(shared: &Path, library: &Path, count: u64) -> Result<Vec<Set>, String> {
+    let mut sets = Vec::new();
+    for (name, dir) in [
+        ("BARN", shared.join("barn")),
+        ("BARN-tight", shared.join("barn-tight")),
+        ("library", library.to_path_buf()),
+        ("examples", shared.join("examples")),
+    ] {
+        let files = collect(std::slice::from_ref(&dir))?;
+        let worlds = files
+            .into_iter()
+            .map(|f| {
+                Scenario::load(&f)
+                    .map(|s| (f, s))
+                    .map_err(|e| e.to_string())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        if worlds.is_empty() {
+            return Err(format!("{}: no scenario files", dir.display()));
+        }
+        sets.push(Set {
+            name: name.into(),
+            source: format!("`{}`", dir.display()),
+            moving: false,
+            worlds,
+        });
+    }
+    let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
+    for (kind, name, first) in GENERATED {
+        let worlds = (first..first + count)
+            .map(|seed| {
+                let stem = format!("{}-{seed}", kind.prefix());
+                let path = PathBuf::from(format!("gen/{stem}.toml"));
+                let text = generate::world(kind, &stem, start, goal, seed);
+                Scenario::parse(&text, &path)
+                    .map(|s| (path, s))
+                    .map_err(|e| e.to_string())
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        let kind_arg = match kind {
+            Kind::Circles => "",
+            Kind::Boxes => " --kind boxes",
+            Kind::Walled => " --kind walled",
+            Kind::Rooms => " --kind rooms",
+            Kind::Moving => " --kind moving",
+        };
+        sets.push(Set {
+            name: name.into(),
+            source: format!("`sim-host gen DIR --count {count} --seed {first}{kind_arg}`"),
+            moving: kind == Kind::Moving,
+            worlds,
+        });
+    }
+    Ok(sets)
+}
+
+/// Every planner of `planners` on every set, seeds `seed ..
+/// seed + seeds`, with one progress bar over all the runs: each set's rows.
+pub fn run(
+    sets: &[Set],
+    planners: &[PlannerKind],
+    seed: u64,
+    seeds: u64,
+    progress: bool,
+) -> Vec<Vec<Row>> {
+    let runs: usize =
+        sets.iter().map(|s| s.worlds.len()).sum::<usize>() * planners.len() * seeds as usize;
+    let bar = if progress {
+        ProgressBar::new(runs as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let out = sets
+        .iter()
+        .map(|set| {
+            let mut rows = Vec::new();
+            for &planner in planners {
+                bar.set_message(format!("{} {}", set.name, planner.name()));
+                // A planner over the known map senses nothing: its runs do
+                // not depend on the seed, so it runs once and its rows
+                // stand for every seed.
+                let once = planner.uses_map().then(|| {
+                    let cfg = SimConfig {
+                        planner,
+                        seed,
+                        ..SimConfig::default()
+                    };
+                    bench::run_scenarios(&set.worlds, &cfg, &bar)
+                });
+                for s in seed..seed + seeds {
+                    match &once {
+                        Some(first) if s == seed => rows.extend(first.iter().cloned()),
+                        Some(first) => {
+                            bar.inc(first.len() as u64);
+                            rows.extend(first.iter().map(|r| Row {
+                                seed: s,
+                                ..r.clone()
+                            }));
+                        }
+                        None => {
+                            let cfg = SimConfig {
+                                planner,
+                                seed: s,
+                                ..SimConfig::default()
+                            };
+                            rows.extend(bench::run_scenarios(&set.worlds, &cfg, &bar));
+                        }
+                    }
+                }
+            }
+            rows
+        })
+        .collect();
+    bar.finish_and_clear();
+    out
+}
+
+/// The planners of `rows` ranked by SPL (best first), each with its totals.
+fn ranked(rows: &[Row]) -> Vec<(String, bench::Totals)> {
+    let mut names: Vec<&str> = Vec::new();
+    for r in rows {
+        if !names.contains(&r.planner.as_str()) {
+            names.push(&r.planner);
+        }
+    }
+    let mut out: Vec<(String, bench::Totals)> = names
+        .into_iter()
+        .map(|p| {
+            let theirs: Vec<Row> = rows.iter().filter(|r| r.planner == p).cloned().collect();
+            (p.to_string(), bench::totals(&theirs))
+        })
+        .collect();
+    out.sort_by(|a, b| {
+        let key = |t: &bench::Totals| t.spl.unwrap_or(-1.0);
+        key(&b.1).total_cmp(&key(&a.1))
+    });
+    out
+}
+
+/// A table of planners ranked by SPL.
+fn table(rows: &[Row]) -> String {
+    let f = |v: Option<f64>| v.map_or_else(|| "–".to_string(), |v| format!("{v:.3}"));
+    let mut s = String::from(
+        "| planner | SPL | reached | collisions | wrongly unreachable | walled-in reported | timeouts | path ratio | time ratio |\n|---|---|---|---|---|---|---|---|---|\n",
+    );
+    for (p, t) in ranked(rows) {
+        let pct = if t.solvable > 0 {
+            format!(" ({:.1} %)", 100.0 * t.reached as f64 / t.solvable as f64)
+        } else {
+            String::new()
+        };
+        let _ = writeln!(
+            s,
+            "| {p} | {} | {}/{}{pct} | {} | {} | {}/{} | {} | {} | {} |",
+            f(t.spl),
+            t.reached,
+            t.solvable,
+            t.collisions,
+            t.wrongly_unreachable,
+            t.unreachable_correct,
+            t.runs - t.solvable,
+            t.timeouts,
+            f(t.mean_ratio),
+            f(t.time_ratio),
+        );
+    }
+    s
+}
+
+/// Whether the product planner's SPL is above every peer's in `rows`:
+/// its SPL and the best peer's, by name.
+fn product_against_peers(rows: &[Row]) -> Option<(f64, String, f64)> {
+    let r = ranked(rows);
+    let eapf = r.iter().find(|(p, _)| p == "eapf")?.1.spl?;
+    let (best, spl) = r
+        .iter()
+        .filter(|(p, _)| PEERS.iter().any(|k| k.name() == p))
+        .filter_map(|(p, t)| t.spl.map(|s| (p.clone(), s)))
+        .max_by(|a, b| a.1.total_cmp(&b.1))?;
+    Some((eapf, best, spl))
+}
+
+/// The world of a set drawn with every planner's path: the first world
+/// (by file) that the product planner does not reach, or the first world.
+fn pictured(set: &Set, rows: &[Row], seed: u64) -> usize {
+    set.worlds
+        .iter()
+        .position(|(f, _)| {
+            rows.iter()
+                .any(|r| &r.file == f && r.planner == "eapf" && r.seed == seed && !r.correct())
+        })
+        .unwrap_or(0)
+}
+
+/// The picture of world `i` of `set` with every planner's run (seed
+/// `seed`), as SVG.
+fn picture(set: &Set, i: usize, planners: &[PlannerKind], seed: u64) -> String {
+    let (_, sc) = &set.worlds[i];
+    let runs: Vec<(&str, sim::RunResult)> = planners
+        .iter()
+        .map(|&planner| {
+            let cfg = SimConfig {
+                planner,
+                seed,
+                ..SimConfig::default()
+            };
+            let refl = reference::shortest_path(sc).map(|r| r.length);
+            (planner.name(), sim::run(sc, &cfg, refl))
+        })
+        .collect();
+    let refp = reference::shortest_path(sc);
+    let borrowed: Vec<(&str, &sim::RunResult)> = runs.iter().map(|(n, r)| (*n, r)).collect();
+    svg::overlay(sc, &borrowed, refp.as_ref())
+}
+
+/// What wrote the page: the command, and the commit it ran at.
+pub struct Provenance {
+    /// The command line.
+    pub command: String,
+    /// The commit (and whether the tree had changes beyond it).
+    pub commit: String,
+}
+
+/// The page, and the pictures to write beside it (file name, SVG): one
+/// per set, in `pictures` (a folder name relative to the page).
+pub fn page(
+    sets: &[Set],
+    rows: &[Vec<Row>],
+    planners: &[PlannerKind],
+    seed: u64,
+    seeds: u64,
+    pictures: &str,
+    made: &Provenance,
+) -> (String, Vec<(String, String)>) {
+    let mut s = String::new();
+    let _ = writeln!(s, "# Results\n");
+    let _ = writeln!(
+        s,
+        "Written by `{}` at commit {}; nothing here is typed by hand. Every planner runs with the same \
+         virtual Sharp sensors, executor, guard and safety rule; seeds {}–{} (sensor noise). \
+         SPL is success weighted by path length (Anderson et al. 2018): the mean over reachable runs \
+         of S·ℓ/max(p, ℓ). The time ratio is the simulated time to the goal (turns and stands \
+         included) over the reference at cruise speed (0.25 m/s), where reached. `liquid`, \
+         `liquid-online` and `route` know the map; the others sense. `liquid` and \
+         `liquid-online` sense nothing, so their runs do not depend on the seed: each world runs \
+         once and counts once per seed.\n",
+        made.command,
+        made.commit,
+        seed,
+        seed + seeds - 1
+    );
+    let still: Vec<Row> = sets
+        .iter()
+        .zip(rows)
+        .filter(|(set, _)| !set.moving)
+        .flat_map(|(_, r)| r.iter().cloned())
+        .collect();
+    let _ = writeln!(
+        s,
+        "## Overall\n\nEvery still-world set together ({} runs per planner), ranked by SPL.\n",
+        still.len() / planners.len().max(1)
+    );
+    s.push_str(&table(&still));
+    let _ = writeln!(
+        s,
+        "\n## The product against the peers\n\n| set | `eapf` SPL | best peer | its SPL | `eapf` ahead |\n|---|---|---|---|---|"
+    );
+    for (set, r) in sets.iter().zip(rows) {
+        if let Some((e, p, ps)) = product_against_peers(r) {
+            let _ = writeln!(
+                s,
+                "| {} | {e:.3} | {p} | {ps:.3} | {} |",
+                set.name,
+                if e > ps { "yes" } else { "no" }
+            );
+        }
+    }
+    let mut svgs = Vec::new();
+    for (set, r) in sets.iter().zip(rows) {
+        let _ = writeln!(
+            s,
+            "\n## {}\n\n{} worlds from {}{}.\n",
+            set.name,
+            set.worlds.len(),
+            set.source,
+            if set.moving {
+                "; moving circles, so not in the overall table"
+            } else {
+                ""
+            }
+        );
+        s.push_str(&table(r));
+        let i = pictured(set, r, seed);
+        let file = format!("{}.svg", set.name.replace(' ', "-").to_lowercase());
+        let _ = writeln!(
+            s,
+            "\n![{}, every planner]({pictures}/{file})\n\n{} with seed {seed}.",
+            set.worlds[i].1.name, set.worlds[i].1.name
+        );
+        svgs.push((file, picture(set, i, planners, seed)));
+    }
+    (s, svgs)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A page of two worlds and three planners: the tables rank by SPL,
+    /// the product is set against the best peer, and each set gets a
+    /// picture with every planner's path.
+    #[test]
+    fn the_page_ranks_by_spl_and_draws_every_planner() {
+        let lib = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        let worlds: Vec<(PathBuf, Scenario)> = ["traps/u-trap.toml", "traps/walled-in.toml"]
+            .iter()
+            .map(|f| {
+                let p = lib.join(f);
+                (p.clone(), Scenario::load(&p).unwrap())
+            })
+            .collect();
+        let sets = [Set {
+            name: "two traps".into(),
+            source: "the library".into(),
+            moving: false,
+            worlds,
+        }];
+        let planners = [PlannerKind::Eapf, PlannerKind::Apf, PlannerKind::Vfh];
+        let rows = run(&sets, &planners, 1, 2, false);
+        assert_eq!(rows[0].len(), 2 * 3 * 2);
+        let made = Provenance {
+            command: "sim-host results".into(),
+            commit: "`abc`".into(),
+        };
+        let (page, svgs) = page(&sets, &rows, &planners, 1, 2, "results", &made);
+        assert!(page.contains("Written by `sim-host results` at commit `abc`"));
+        // Ranked by SPL: each table's SPL column never grows downwards.
+        let spls: Vec<f64> = page
+            .lines()
+            .skip_while(|l| !l.starts_with("## Overall"))
+            .filter(|l| {
+                l.starts_with("| eapf |") || l.starts_with("| apf |") || l.starts_with("| vfh |")
+            })
+            .take(3)
+            .map(|l| l.split('|').nth(2).unwrap().trim().parse().unwrap())
+            .collect();
+        assert_eq!(spls.len(), 3, "{page}");
+        assert!(spls.windows(2).all(|w| w[0] >= w[1]), "{spls:?}");
+        // The product against the best peer (the only one here, vfh).
+        assert!(page.contains("| two traps | "), "{page}");
+        assert!(page.contains("| vfh | "), "{page}");
+        assert_eq!(svgs.len(), 1);
+        assert_eq!(svgs[0].0, "two-traps.svg");
+        for p in ["eapf", "apf", "vfh"] {
+            assert!(svgs[0].1.contains(&format!(">{p} (")), "{p}");
+        }
+        assert!(
+            page.contains("![u-trap, every planner](results/two-traps.svg)")
+                || page.contains("![walled-in, every planner](results/two-traps.svg)")
+        );
+    }
+}
