@@ -48,6 +48,11 @@ pub struct Row {
     /// (absent from rows written before it was recorded).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub time_ratio: Option<f64>,
+    /// The run's term of SPL ([`Row::spl_term`]); absent where SPL does
+    /// not count the run (and from rows written before it was recorded,
+    /// which [`load_rows`] fills in).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub spl: Option<f64>,
 }
 
 impl Row {
@@ -63,7 +68,7 @@ impl Row {
     /// al. 2018): S·ℓ/max(p, ℓ), S = 1 if reached, ℓ the reference, p the
     /// driven length; `None` for a run SPL does not count (an unsolvable
     /// world, or one without a reference).
-    pub fn spl(&self) -> Option<f64> {
+    pub fn spl_term(&self) -> Option<f64> {
         match (self.solvable, self.reference_length) {
             (true, Some(l)) if l > 0.0 => Some(if self.outcome == Outcome::Reached {
                 l / self.path_length.max(l)
@@ -71,6 +76,14 @@ impl Row {
                 0.0
             }),
             _ => None,
+        }
+    }
+
+    /// The row with its SPL term filled in.
+    pub fn with_spl(self) -> Row {
+        Row {
+            spl: self.spl_term(),
+            ..self
         }
     }
 
@@ -218,7 +231,9 @@ fn run_with(
                     (Outcome::Reached, Some(l)) if l > 0.0 => Some(res.duration_s * cfg.speed / l),
                     _ => None,
                 },
+                spl: None,
             }
+            .with_spl()
         })
         .collect();
     rows.sort_by(|a, b| a.file.cmp(&b.file));
@@ -251,7 +266,7 @@ pub struct Totals {
     pub within_125: usize,
     /// Reachable goals reported unreachable.
     pub wrongly_unreachable: usize,
-    /// SPL over the runs it counts ([`Row::spl`]).
+    /// SPL over the runs it counts ([`Row::spl_term`]).
     pub spl: Option<f64>,
     /// Mean time ratio over reached runs with a reference.
     pub time_ratio: Option<f64>,
@@ -294,7 +309,7 @@ pub fn totals(rows: &[Row]) -> Totals {
         mean_ratio: (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64),
         within_125: ratios.iter().filter(|&&r| r <= 1.25).count(),
         wrongly_unreachable: rows.iter().filter(|r| r.wrongly_unreachable()).count(),
-        spl: mean(rows.iter().filter_map(Row::spl)),
+        spl: mean(rows.iter().filter_map(|r| r.spl)),
         time_ratio: mean(rows.iter().filter_map(|r| r.time_ratio)),
     }
 }
@@ -471,7 +486,8 @@ pub fn load_rows(path: &Path) -> Result<Vec<Row>, String> {
         .enumerate()
         .filter(|(_, l)| !l.trim().is_empty())
         .map(|(i, l)| {
-            serde_json::from_str(l)
+            serde_json::from_str::<Row>(l)
+                .map(Row::with_spl)
                 .map_err(|e| format!("{}:{}: not a bench run: {e}", path.display(), i + 1))
         })
         .collect()
@@ -598,7 +614,9 @@ mod tests {
             seed,
             contact: None,
             time_ratio: None,
+            spl: None,
         }
+        .with_spl()
     }
 
     /// The last column compares the planners on the runs all of them
@@ -755,8 +773,14 @@ mod tests {
             Row {
                 reference_length: None,
                 ..row("route", "w2", 1, Outcome::Timeout, 7.0)
-            },
+            }
+            .with_spl(),
         ];
+        // A reachable goal not reached counts 0 in SPL; without a
+        // reference the run does not count.
+        let line = serde_json::to_string(&rows[0]).unwrap();
+        assert!(line.contains(r#""spl":0.0"#), "{line}");
+        assert_eq!(rows[1].spl, None);
         let dir = std::env::temp_dir().join(format!("sim-host-load-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let file = dir.join("runs.jsonl");

@@ -107,7 +107,7 @@ fn peers_have_names_and_their_runs_have_spl() {
         let rows = runs(*planner, 1);
         let r = rows.iter().find(|r| r.name == "env1-ex1").unwrap();
         assert_eq!(r.planner, name);
-        let spl = r.spl().unwrap();
+        let spl = r.spl.unwrap();
         assert!(spl > 0.0 && spl <= 1.0, "{spl}");
         let time = r.time_ratio.unwrap();
         // Turns and stands included: slower than driving the reference.

@@ -15,7 +15,8 @@
 //!   boundary has no point on the m-line nearer the goal, so it encloses
 //!   the start or the goal. Near H but off the m-line is not back at H:
 //!   among small obstacles the five beams lose the boundary and the rover
-//!   can come round another one beside H.
+//!   can come round another one beside H. Ours: after
+//!   [`HitLoop::BUDGET_CYCLES`] of following from one hit point too.
 //!
 //! Its path is at most D + ½Σ nᵢpᵢ (D the start–goal distance, pᵢ the
 //! perimeters of the obstacles the m-line crosses nᵢ times).
@@ -107,7 +108,7 @@ impl Bug2 {
             } => {
                 // Back at H is back on the m-line at H: near it without
                 // crossing the line is another boundary met beside it.
-                if hit.update(pose.position).0 && on_line {
+                if (hit.update(pose.position).0 && on_line) || hit.spent() {
                     self.mode = Mode::Unreachable;
                     return self.senses.stop(pose, Status::Unreachable);
                 }

@@ -350,6 +350,8 @@ pub struct HitLoop {
     near: bool,
     /// The offset from the hit point when the rover first left its radius.
     out: Option<(i32, i32)>,
+    /// Cycles since the hit.
+    cycles: u16,
 }
 
 impl HitLoop {
@@ -358,6 +360,13 @@ impl HitLoop {
     pub const BACK_MM: u16 = 250;
     /// Away from the hit point: beyond this, mm.
     pub const AWAY_MM: u16 = 600;
+    /// Ours: a boundary followed this many cycles from one hit point is
+    /// taken as gone round. Among obstacles the five beams lose and find
+    /// again the rover can come round a loop that does not pass the hit
+    /// point (another cluster beside the boundary it met), where the
+    /// papers' test never closes; this bounds it (the product's follower
+    /// has the same safety net).
+    pub const BUDGET_CYCLES: u16 = 1_000;
 
     /// A boundary met at `hit`.
     pub fn new(hit: Point) -> HitLoop {
@@ -366,6 +375,7 @@ impl HitLoop {
             away: false,
             near: true,
             out: None,
+            cycles: 0,
         }
     }
 
@@ -375,10 +385,16 @@ impl HitLoop {
         self.update(robot).1
     }
 
+    /// Whether [`HitLoop::BUDGET_CYCLES`] have passed since the hit.
+    pub fn spent(&self) -> bool {
+        self.cycles > Self::BUDGET_CYCLES
+    }
+
     /// The rover is at `robot`: is it back within the hit point's radius
     /// after going away, and has it come back round (just entered it from
     /// the other side)?
     pub fn update(&mut self, robot: Point) -> (bool, bool) {
+        self.cycles = self.cycles.saturating_add(1);
         let near = within(self.hit, robot, Self::BACK_MM);
         let (x, y) = self.hit.to(robot);
         let entered = near && !self.near;

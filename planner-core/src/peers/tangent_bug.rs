@@ -10,7 +10,8 @@
 //!   seen since; **leave** when d_reach, the least goal distance of the
 //!   visible free points, is below d_followed by [`PROGRESS_MM`].
 //! - **Unreachable** on coming back round to where the following began
-//!   ([`HitLoop`]).
+//!   ([`HitLoop`]), or (ours) after [`HitLoop::BUDGET_CYCLES`] of
+//!   following.
 //!
 //! How it deviates from the paper's 360° sensor of radius R:
 //!
@@ -101,7 +102,7 @@ impl TangentBug {
                 mut hit,
                 followed_mm,
             } => {
-                if hit.closed(pose.position) {
+                if hit.closed(pose.position) || hit.spent() {
                     self.mode = Mode::Unreachable;
                     return self.senses.stop(pose, Status::Unreachable);
                 }
