@@ -680,7 +680,10 @@ impl Planner {
     fn back_out(&mut self, robot: Point) -> Option<Output> {
         let (from, _) = self.came_from.take()?;
         let (dx, dy) = robot.to(from);
-        let back_mm = hypot(dx, dy);
+        // No longer than the sensors' range (a run of advances can be
+        // metres long; the rest of the way back is planned from the next
+        // view).
+        let back_mm = hypot(dx, dy).min(self.config.sensor_range_mm);
         let heading = Angle::atan2(dy, dx);
         self.turned_in_place = 0;
         if back_mm < self.config.min_step_mm {
@@ -788,12 +791,19 @@ impl Planner {
     /// The guard the executor calls during an advance with fresh raw counts
     /// and the part of the step still to go.
     pub fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
-        let readings = self.readings(raw);
+        let mut readings = self.readings(raw);
         self.flank
             .saw(&self.config, self.stepped_from, &readings, remaining_mm);
-        if self.backing_out && !readings.contains(&Reading::Implausible) {
-            // The wedge rule's way back: the disc has just swept it.
-            return Guard::Continue;
+        if self.backing_out {
+            // The wedge rule's way back: the disc has just swept it, and
+            // the beams' "too close" (the wedge's walls, nearer than the
+            // sensors' minimum range) says nothing of it. A ranged reading
+            // in the way (a thing that moved there) still stops it.
+            for r in readings.iter_mut() {
+                if matches!(r, Reading::TooClose) {
+                    *r = Reading::Clear;
+                }
+            }
         }
         command::guard(&self.config, &readings, remaining_mm)
     }
@@ -822,6 +832,13 @@ impl Planner {
     #[cfg(feature = "report")]
     pub fn last_collision_points(&self) -> &[Point] {
         &self.last_points
+    }
+
+    /// Whether this cycle's step backs out along the way the rover came
+    /// (the wedge rule): its guard trusts "too close" readings, which the
+    /// wedge's walls give, but not ranged ones.
+    pub fn backing_out(&self) -> bool {
+        self.backing_out
     }
 
     /// The readings of the last cycle, after filtering.
@@ -1215,9 +1232,50 @@ mod tests {
         assert_eq!(back.heading, Angle::from_deg(-90), "due south");
         assert_eq!(back.step_mm, 400, "back to where the run began");
         assert_eq!(p.guard_raw(&[near; 5], 400), Guard::Continue);
+        // A thing the beams range in the way stops it all the same.
+        let cal = p.config().calibration(2).unwrap();
+        let c200 = (0..cal.full_scale())
+            .find(|&c| cal.reading(c).range_mm().is_some_and(|mm| mm <= 200))
+            .unwrap();
+        assert_eq!(
+            p.guard_raw(&[near, near, c200, near, near], 400),
+            Guard::Stop
+        );
         // Backed out: the next cycle plans and guards as before.
         let _ = p.step_raw(at(0, 0, -90), &[near; 5]);
         assert_eq!(p.guard_raw(&[near; 5], 100), Guard::Stop);
+    }
+
+    #[test]
+    fn a_long_way_in_is_backed_out_no_farther_than_a_step() {
+        // Four advances north (760 mm each, the longest step) into the
+        // pocket: the way back is 3,040 mm, the back-out the sensors'
+        // range of it.
+        let mut p = planner(Point::new(0, 9_000));
+        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let mut y = 0;
+        for _ in 0..4 {
+            let out = p.step_raw(at(0, y, 90), &[FAR; 5]).command;
+            assert_eq!((out.heading, out.step_mm), (Angle::from_deg(90), 760));
+            y += 760;
+        }
+        let mut heading = Angle::from_deg(90);
+        let back = loop {
+            let pose = Pose {
+                position: Point::new(0, y),
+                heading,
+            };
+            let out = p.step_raw(pose, &[near; 5]).command;
+            if out.step_mm > 0 {
+                break out;
+            }
+            heading = out.heading;
+        };
+        assert_eq!(back.heading, Angle::from_deg(-90));
+        assert_eq!(
+            back.step_mm, 800,
+            "the sensors' range, not the 3,040 mm run"
+        );
     }
 
     #[test]

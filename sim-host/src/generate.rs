@@ -129,7 +129,15 @@ pub struct RandomWorld {
     pub robot_radius: f64,
     /// Seed.
     pub seed: u64,
+    /// Draws left before the world is given up (see [`MAX_DRAWS`]).
+    draws: std::cell::Cell<u32>,
 }
+
+/// The most random draws (a shape, a run, a ring, a row of rooms, a whole
+/// world) one world may take. Start and goal where nothing fits (outside
+/// the arena, on top of each other, not numbers) would otherwise be drawn
+/// round for ever; a good world takes a few hundred.
+pub const MAX_DRAWS: u32 = 20_000;
 
 impl RandomWorld {
     /// The paper's environment 2 parameters with a given start and goal.
@@ -143,7 +151,21 @@ impl RandomWorld {
             goal,
             robot_radius: 0.10,
             seed,
+            draws: std::cell::Cell::new(MAX_DRAWS),
         }
+    }
+
+    /// One more draw of `what`, or the error once [`MAX_DRAWS`] are spent.
+    fn draw(&self, what: &str) -> Result<(), String> {
+        let left = self.draws.get();
+        if left == 0 {
+            return Err(format!(
+                "{}: no {what} fits after {MAX_DRAWS} draws (start {:?}, goal {:?} in a {} × {} m arena)",
+                self.name, self.start, self.goal, self.size[0], self.size[1]
+            ));
+        }
+        self.draws.set(left - 1);
+        Ok(())
     }
 
     /// The file's first lines: format, name, description, bounds, start,
@@ -162,30 +184,31 @@ impl RandomWorld {
 
     /// The scenario file text. Circles that would come within
     /// `robot_radius + KEEP_CLEAR_M` (0.15 m) of the start or goal are drawn again.
-    pub fn to_toml(&self, description: &str) -> String {
+    pub fn to_toml(&self, description: &str) -> Result<String, String> {
         let mut s = self.header(description);
         let _ = writeln!(
             s,
             "# generated: seed {}, {} circles, radii {}..{} m",
             self.seed, self.circles, self.radii[0], self.radii[1]
         );
-        for ([x, y], r) in self.circle_list() {
+        for ([x, y], r) in self.circle_list()? {
             let _ = writeln!(
                 s,
                 "\n[[circle]]\ncenter = [{x:.3}, {y:.3}]\nradius = {r:.3}"
             );
         }
-        s
+        Ok(s)
     }
 
     /// The circle world's circles (centre, radius; m), as written to the
     /// file (millimetres).
-    fn circle_list(&self) -> Vec<([f64; 2], f64)> {
+    fn circle_list(&self) -> Result<Vec<([f64; 2], f64)>, String> {
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let keep = self.keep_clear_m();
         let mm = |v: f64| (v * 1000.0).round() / 1000.0;
         let mut circles = Vec::with_capacity(self.circles);
         while circles.len() < self.circles {
+            self.draw("circle clear of the start and goal")?;
             let r = rng.gen_range(self.radii[0]..=self.radii[1]);
             let x = rng.gen_range(0.0..self.size[0]);
             let y = rng.gen_range(0.0..self.size[1]);
@@ -194,7 +217,7 @@ impl RandomWorld {
                 circles.push(([mm(x), mm(y)], mm(r)));
             }
         }
-        circles
+        Ok(circles)
     }
 
     /// A moving world's file text ([`Kind::Moving`]): the circle world of
@@ -203,9 +226,9 @@ impl RandomWorld {
     /// while it comes within the mover's radius of a static circle, or
     /// within it plus `robot_radius + KEEP_CLEAR_M` of the start or goal
     /// (the rover is not struck where it begins or ends).
-    pub fn moving_toml(&self, description: &str) -> String {
-        let mut s = self.to_toml(description);
-        let circles = self.circle_list();
+    pub fn moving_toml(&self, description: &str) -> Result<String, String> {
+        let mut s = self.to_toml(description)?;
+        let circles = self.circle_list()?;
         let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x4d4f_5645);
         let v = |p: [f64; 2]| V2::new(p[0], p[1]);
         let (start, goal) = (v(self.start), v(self.goal));
@@ -217,6 +240,7 @@ impl RandomWorld {
         );
         let mut n = 0;
         while n < MOVERS {
+            self.draw("mover's run clear of the start, the goal and the circles")?;
             let r = rng.gen_range(MOVER_RADII[0]..=MOVER_RADII[1]);
             let speed = rng.gen_range(MOVER_SPEEDS[0]..=MOVER_SPEEDS[1]);
             let run = rng.gen_range(MOVER_RUNS[0]..=MOVER_RUNS[1]);
@@ -244,13 +268,24 @@ impl RandomWorld {
             );
             n += 1;
         }
-        s
+        Ok(s)
     }
 }
 
 /// The file text of a random world of `kind` in the paper's environment 2
 /// arena, named `name`, from `start` to `goal`, drawn from `seed`.
-pub fn world(kind: Kind, name: &str, start: [f64; 2], goal: [f64; 2], seed: u64) -> String {
+pub fn world(
+    kind: Kind,
+    name: &str,
+    start: [f64; 2],
+    goal: [f64; 2],
+    seed: u64,
+) -> Result<String, String> {
+    if !start.iter().chain(&goal).all(|v| v.is_finite()) {
+        return Err(format!(
+            "{name}: start {start:?} and goal {goal:?} must be numbers"
+        ));
+    }
     let w = RandomWorld::paper_env2(name, start, goal, seed);
     match kind {
         Kind::Circles => w.to_toml(kind.description()),
@@ -267,7 +302,7 @@ impl RandomWorld {
     /// `robot_radius + KEEP_CLEAR_M` (0.15 m) of the start or goal are drawn again; so is
     /// the whole world while the reference cannot tell whether the goal is
     /// closed off (see [`UNSOLVABLE_MARGIN_M`]).
-    pub fn boxes_toml(&self, description: &str) -> String {
+    pub fn boxes_toml(&self, description: &str) -> Result<String, String> {
         self.boxes_with(description, &[])
     }
 
@@ -280,7 +315,7 @@ impl RandomWorld {
     /// the same seed and a closed ring of walls round the goal (odd seeds)
     /// or the start (even seeds), drawn from its own stream so that the
     /// boxes are those of `box-<seed>`.
-    pub fn walled_toml(&self, description: &str) -> String {
+    pub fn walled_toml(&self, description: &str) -> Result<String, String> {
         let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x5741_4c4c);
         let inside = if self.seed % 2 == 1 {
             self.goal
@@ -289,6 +324,7 @@ impl RandomWorld {
         };
         let keep = self.keep_clear_m();
         loop {
+            self.draw("ring of walls clear of what it holds")?;
             let n = rng.gen_range(RING_CORNERS[0]..=RING_CORNERS[1]);
             let corners: Vec<[f64; 2]> = (0..n)
                 .map(|i| {
@@ -320,13 +356,15 @@ impl RandomWorld {
     }
 
     /// The box world of `self`'s seed with `extra` shapes added.
-    fn boxes_with(&self, description: &str, extra: &[TurnedBox]) -> String {
+    fn boxes_with(&self, description: &str, extra: &[TurnedBox]) -> Result<String, String> {
         let mut rng = Pcg64::seed_from_u64(self.seed);
         let keep = self.keep_clear_m();
         loop {
+            self.draw("box world whose goal the reference can tell")?;
             let mut body = polygons_text(extra);
             let mut n = 0;
             while n < BOXES + WALLS {
+                self.draw("box or wall clear of the start and goal")?;
                 let (w, h) = if n < BOXES {
                     (
                         rng.gen_range(BOX_SIDES[0]..=BOX_SIDES[1]),
@@ -371,8 +409,8 @@ impl RandomWorld {
             };
             let text = head(true);
             match Scenario::parse(&text, Path::new(&self.name)).map(|sc| reachable(&sc)) {
-                Ok(Some(true)) => return text,
-                Ok(Some(false)) => return head(false),
+                Ok(Some(true)) => return Ok(text),
+                Ok(Some(false)) => return Ok(head(false)),
                 _ => {}
             }
         }
@@ -383,8 +421,15 @@ impl RandomWorld {
     /// Wall lines across one side of the arena, `length` m long: room
     /// sides drawn from [`ROOM_SIDES`] until the last room is at least the
     /// smallest side, none within `keep` (plus half a wall) of `avoid`.
-    fn wall_lines(rng: &mut Pcg64, length: f64, avoid: [f64; 2], keep: f64) -> Vec<f64> {
+    fn wall_lines(
+        &self,
+        rng: &mut Pcg64,
+        length: f64,
+        avoid: [f64; 2],
+        keep: f64,
+    ) -> Result<Vec<f64>, String> {
         loop {
+            self.draw("row of rooms whose walls miss the start and goal")?;
             let mut lines = Vec::new();
             let mut at = rng.gen_range(ROOM_SIDES[0]..=ROOM_SIDES[1]);
             while at < length - ROOM_SIDES[0] {
@@ -397,18 +442,18 @@ impl RandomWorld {
                     .all(|a| (a - w).abs() > keep + WALL_THICKNESS / 2.0)
             };
             if lines.iter().all(clear) {
-                return lines;
+                return Ok(lines);
             }
         }
     }
 
     /// A floor's file text ([`Kind::Rooms`]).
-    pub fn rooms_toml(&self, description: &str) -> String {
+    pub fn rooms_toml(&self, description: &str) -> Result<String, String> {
         let mut rng = Pcg64::seed_from_u64(self.seed ^ 0x524f_4f4d);
         let keep = self.keep_clear_m();
         let [w, h] = self.size;
-        let xs = Self::wall_lines(&mut rng, w, [self.start[0], self.goal[0]], keep);
-        let ys = Self::wall_lines(&mut rng, h, [self.start[1], self.goal[1]], keep);
+        let xs = self.wall_lines(&mut rng, w, [self.start[0], self.goal[0]], keep)?;
+        let ys = self.wall_lines(&mut rng, h, [self.start[1], self.goal[1]], keep)?;
         // Room (i, j) spans edges[i]..edges[i + 1] across and likewise up.
         let edges = |lines: &[f64], end: f64| {
             let mut e = vec![0.0];
@@ -481,6 +526,7 @@ impl RandomWorld {
             doors.len()
         );
         loop {
+            self.draw("furnished floor whose goal the reference reaches")?;
             let mut furniture: Vec<TurnedBox> = Vec::new();
             for j in 0..ny {
                 for i in 0..nx {
@@ -512,7 +558,7 @@ impl RandomWorld {
             );
             if let Ok(sc) = Scenario::parse(&text, Path::new(&self.name)) {
                 if reachable(&sc) == Some(true) {
-                    return text;
+                    return Ok(text);
                 }
             }
         }
@@ -621,8 +667,8 @@ mod tests {
     #[test]
     fn generated_worlds_are_valid_and_seeded() {
         let w = RandomWorld::paper_env2("g", START, GOAL, 3);
-        let a = w.to_toml("test");
-        assert_eq!(a, w.to_toml("test"));
+        let a = w.to_toml("test").unwrap();
+        assert_eq!(a, w.to_toml("test").unwrap());
         let sc = parsed(&a);
         assert_eq!(sc.circle.len(), 80);
         assert!(sc.circle.iter().all(|c| (0.12..=0.9).contains(&c.radius)));
@@ -635,9 +681,40 @@ mod tests {
     /// `kind`'s world of `seed` between [`START`] and [`GOAL`], which must
     /// come out the same twice.
     fn generated(kind: Kind, seed: u64) -> String {
-        let text = world(kind, "g", START, GOAL, seed);
-        assert_eq!(text, world(kind, "g", START, GOAL, seed), "seed {seed}");
+        let text = world(kind, "g", START, GOAL, seed).unwrap();
+        assert_eq!(
+            text,
+            world(kind, "g", START, GOAL, seed).unwrap(),
+            "seed {seed}"
+        );
         text
+    }
+
+    /// Where nothing fits, every kind ends with an error naming the world,
+    /// not a loop: start and goal that are not numbers, a start in the
+    /// arena's corner (no ring of walls or row of rooms misses it), start
+    /// and goal on one spot (every mover's run crosses them).
+    #[test]
+    fn where_nothing_fits_generation_ends_with_an_error() {
+        let nan = [f64::NAN, f64::NAN];
+        for kind in [
+            Kind::Circles,
+            Kind::Boxes,
+            Kind::Walled,
+            Kind::Moving,
+            Kind::Rooms,
+        ] {
+            let e = world(kind, "g", nan, GOAL, 1).unwrap_err();
+            assert!(e.contains("must be numbers"), "{e}");
+        }
+        for kind in [Kind::Boxes, Kind::Walled, Kind::Rooms] {
+            match world(kind, "g", [0.01, 0.01], GOAL, 1) {
+                Ok(text) => assert!(Scenario::parse(&text, Path::new("g")).is_ok()),
+                Err(e) => assert!(e.contains("g: no ") && e.contains("draws"), "{e}"),
+            }
+        }
+        let e = world(Kind::Moving, "g", START, START, 1).unwrap_err();
+        assert!(e.contains("no mover's run"), "{e}");
     }
 
     #[test]

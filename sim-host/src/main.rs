@@ -496,7 +496,7 @@ fn gen_world(
     goal: [f64; 2],
     seed: u64,
 ) -> Result<(), String> {
-    write(out, &generate::world(kind, name, start, goal, seed))?;
+    write(out, &generate::world(kind, name, start, goal, seed)?)?;
     Scenario::load(out).map(|_| ()).map_err(|e| e.to_string())
 }
 

@@ -89,7 +89,7 @@ pub fn sets(shared: &Path, library: &Path, count: u64) -> Result<Vec<Set>, Strin
             .map(|seed| {
                 let stem = format!("{}-{seed}", kind.prefix());
                 let path = PathBuf::from(format!("gen/{stem}.toml"));
-                let text = generate::world(kind, &stem, start, goal, seed);
+                let text = generate::world(kind, &stem, start, goal, seed)?;
                 Scenario::parse(&text, &path)
                     .map(|s| (path, s))
                     .map_err(|e| e.to_string())

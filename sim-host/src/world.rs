@@ -378,7 +378,7 @@ mod tests {
             .map(|f| Scenario::load(f).unwrap())
             .collect();
         for kind in [Kind::Boxes, Kind::Circles] {
-            let text = generated(kind, "g", [6.0, 7.3], [12.7, 9.75], 5);
+            let text = generated(kind, "g", [6.0, 7.3], [12.7, 9.75], 5).unwrap();
             scenarios.push(Scenario::parse(&text, Path::new("g")).unwrap());
         }
         scenarios

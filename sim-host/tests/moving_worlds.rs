@@ -28,7 +28,7 @@ fn runs(planner: PlannerKind, set_back: bool) -> Vec<Row> {
         .map(|seed| {
             let name = format!("mov-{seed}");
             let file = dir.join(format!("{name}.toml"));
-            let text = world(Kind::Moving, &name, [6.0, 7.3], [12.7, 9.75], seed);
+            let text = world(Kind::Moving, &name, [6.0, 7.3], [12.7, 9.75], seed).unwrap();
             std::fs::write(&file, text).unwrap();
             file
         })

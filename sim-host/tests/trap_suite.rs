@@ -167,7 +167,7 @@ fn generated(seed: u64) -> (String, String) {
     use sim_host::generate::RandomWorld;
     let name = format!("gen-{seed}");
     let world = RandomWorld::paper_env2(&name, [6.0, 7.3], [12.7, 9.75], seed);
-    let text = world.to_toml(&format!("gen --seed {seed}"));
+    let text = world.to_toml(&format!("gen --seed {seed}")).unwrap();
     (name, text)
 }
 
@@ -335,7 +335,7 @@ fn generated_runs(
     for &(world_seed, seed) in runs {
         let name = format!("{}-{world_seed}", kind.prefix());
         let file = dir.join(format!("{name}.toml"));
-        let text = world(kind, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
+        let text = world(kind, &name, [6.0, 7.3], [12.7, 9.75], world_seed).unwrap();
         std::fs::write(&file, text).unwrap();
         let cfg = SimConfig {
             seed,
@@ -422,7 +422,7 @@ fn assert_walled_reported(world_seeds: &[u64]) {
         .map(|&world_seed| {
             let name = format!("walled-{world_seed}");
             let file = dir.join(format!("{name}.toml"));
-            let text = world(Kind::Walled, &name, [6.0, 7.3], [12.7, 9.75], world_seed);
+            let text = world(Kind::Walled, &name, [6.0, 7.3], [12.7, 9.75], world_seed).unwrap();
             std::fs::write(&file, text).unwrap();
             file
         })
