@@ -11,6 +11,7 @@ use std::path::{Path, PathBuf};
 #[serde(deny_unknown_fields)]
 pub struct CircleSpec {
     /// Centre, m.
+    #[serde(deserialize_with = "exact")]
     pub center: [f64; 2],
     /// Radius, m.
     pub radius: f64,
@@ -21,6 +22,7 @@ pub struct CircleSpec {
 #[serde(deny_unknown_fields)]
 pub struct PolygonSpec {
     /// Vertices, m.
+    #[serde(deserialize_with = "exact_points")]
     pub points: Vec<[f64; 2]>,
 }
 
@@ -29,10 +31,12 @@ pub struct PolygonSpec {
 #[serde(deny_unknown_fields)]
 pub struct MovingSpec {
     /// Centre at time zero, m.
+    #[serde(deserialize_with = "exact")]
     pub center: [f64; 2],
     /// Radius, m.
     pub radius: f64,
     /// Waypoints, m.
+    #[serde(deserialize_with = "exact_points")]
     pub waypoints: Vec<[f64; 2]>,
     /// Speed, m/s.
     pub speed: f64,
@@ -50,13 +54,16 @@ pub struct Scenario {
     #[serde(default)]
     pub description: Option<String>,
     /// xmin, ymin, xmax, ymax, m; the boundary is a wall.
+    #[serde(deserialize_with = "exact")]
     pub bounds: [f64; 4],
     /// Start, m.
+    #[serde(deserialize_with = "exact")]
     pub start: [f64; 2],
     /// Start heading, degrees; default: facing the goal.
     #[serde(default)]
     pub start_heading: Option<f64>,
     /// Goal, m.
+    #[serde(deserialize_with = "exact")]
     pub goal: [f64; 2],
     /// Robot radius, m (default 0.10).
     #[serde(default = "default_radius")]
@@ -73,6 +80,29 @@ pub struct Scenario {
     /// Moving circles.
     #[serde(default)]
     pub moving: Vec<MovingSpec>,
+}
+
+/// Exactly `N` numbers: a longer or shorter array is an error, not cut to
+/// size ("a typo must not silently change a world").
+fn exact<'de, D: serde::Deserializer<'de>, const N: usize>(d: D) -> Result<[f64; N], D::Error> {
+    let v = Vec::<f64>::deserialize(d)?;
+    <[f64; N]>::try_from(v.as_slice())
+        .map_err(|_| serde::de::Error::custom(format!("expected {N} numbers, found {}", v.len())))
+}
+
+/// A list of points of exactly two numbers each.
+fn exact_points<'de, D: serde::Deserializer<'de>>(d: D) -> Result<Vec<[f64; 2]>, D::Error> {
+    Vec::<Vec<f64>>::deserialize(d)?
+        .into_iter()
+        .map(|p| {
+            <[f64; 2]>::try_from(p.as_slice()).map_err(|_| {
+                serde::de::Error::custom(format!(
+                    "expected points of 2 numbers, found one of {}",
+                    p.len()
+                ))
+            })
+        })
+        .collect()
 }
 
 fn default_radius() -> f64 {
@@ -126,14 +156,24 @@ impl Scenario {
             rule,
         };
         let sc: Scenario = toml::from_str(text).map_err(|e| {
-            let msg = e.message().to_string();
-            // toml names unknown and missing fields in its message; pull the key out.
-            let key = msg
-                .split('`')
-                .nth(1)
-                .map(str::to_string)
-                .unwrap_or_else(|| "-".to_string());
-            err(&key, format!("not valid format 1 TOML: {}", msg.trim()))
+            let msg = e.message().trim().to_string();
+            // The line the error is on, and the key written there; an
+            // unknown or missing field is named in the message.
+            let at = e.span().map(|s| s.start.min(text.len()));
+            let line_no = at.map(|a| text[..a].matches('\n').count() + 1);
+            let line_key = at.and_then(|a| {
+                let line = text[..a].rsplit('\n').next().unwrap_or("").to_string()
+                    + text[a..].split('\n').next().unwrap_or("");
+                line.split_once('=')
+                    .map(|(k, _)| k.trim().to_string())
+                    .filter(|k| !k.is_empty() && !k.starts_with('['))
+            });
+            let named = (msg.starts_with("unknown field") || msg.starts_with("missing field"))
+                .then(|| msg.split('`').nth(1).map(str::to_string))
+                .flatten();
+            let key = named.or(line_key).unwrap_or_else(|| "-".to_string());
+            let line = line_no.map_or_else(String::new, |n| format!("line {n}: "));
+            err(&key, format!("{line}not valid format 1 TOML: {msg}"))
         })?;
         sc.validate().map_err(|(k, r)| err(&k, r))?;
         Ok(sc)
@@ -162,8 +202,14 @@ impl Scenario {
                 "must lie within ±32.767 m (the planner's positions are 16-bit millimetres)",
             );
         }
-        if !(self.robot_radius.is_finite() && self.robot_radius > 0.0 && self.robot_radius < 1.0) {
-            return fail("robot_radius", "must be in (0, 1) m");
+        // Ours: the planner's disc is at least 20 mm (its configuration's
+        // least radius), so a smaller one would be driven as another robot
+        // than the one the simulator checks.
+        if !(self.robot_radius.is_finite()
+            && self.robot_radius >= MIN_RADIUS_M
+            && self.robot_radius < 1.0)
+        {
+            return fail("robot_radius", "must be in [0.02, 1) m");
         }
         if let Some(h) = self.start_heading {
             if !h.is_finite() {
@@ -187,6 +233,12 @@ impl Scenario {
             }
             if polygon_area(&p.points).abs() < 1e-12 {
                 return fail(&format!("polygon[{k}].points"), "has no area");
+            }
+            if self_intersects(&p.points) {
+                return fail(
+                    &format!("polygon[{k}].points"),
+                    "must be a simple polygon: two of its edges cross",
+                );
             }
         }
         for (k, m) in self.moving.iter().enumerate() {
@@ -242,6 +294,44 @@ impl Scenario {
 
 fn glam(p: [f64; 2]) -> crate::geom::V2 {
     crate::geom::V2::new(p[0], p[1])
+}
+
+/// The least robot radius, m: the planner's (20 mm).
+pub const MIN_RADIUS_M: f64 = 0.02;
+
+/// Whether two edges of the closed polygon `pts` that are not neighbours
+/// cross or touch (a simple polygon's edges meet only at their shared
+/// corners).
+pub fn self_intersects(pts: &[[f64; 2]]) -> bool {
+    let n = pts.len();
+    let edge = |i: usize| (pts[i], pts[(i + 1) % n]);
+    let orient = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        ((b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0])).signum()
+    };
+    let on = |a: [f64; 2], b: [f64; 2], c: [f64; 2]| {
+        c[0] >= a[0].min(b[0])
+            && c[0] <= a[0].max(b[0])
+            && c[1] >= a[1].min(b[1])
+            && c[1] <= a[1].max(b[1])
+    };
+    let meet = |(a, b): ([f64; 2], [f64; 2]), (c, d): ([f64; 2], [f64; 2])| {
+        let (o1, o2, o3, o4) = (
+            orient(a, b, c),
+            orient(a, b, d),
+            orient(c, d, a),
+            orient(c, d, b),
+        );
+        (o1 * o2 < 0.0 && o3 * o4 < 0.0)
+            || (o1 == 0.0 && on(a, b, c))
+            || (o2 == 0.0 && on(a, b, d))
+            || (o3 == 0.0 && on(c, d, a))
+            || (o4 == 0.0 && on(c, d, b))
+    };
+    (0..n).any(|i| {
+        (i + 2..n)
+            .filter(|&j| !(i == 0 && j == n - 1))
+            .any(|j| meet(edge(i), edge(j)))
+    })
 }
 
 /// Signed area (shoelace).
@@ -362,6 +452,52 @@ radius = 0.5
             assert_eq!(e.key, key, "{e}");
             assert!(!e.rule.is_empty());
         }
+    }
+
+    /// What FORMAT.md says may not pass silently: an array longer or
+    /// shorter than the format's (cut to size before), a polygon whose
+    /// edges cross (it had area, so it loaded), a disc smaller than the
+    /// planner's 20 mm (driven as a 20 mm one while the simulator checked
+    /// the small one); a type error names its line and key.
+    #[test]
+    fn what_would_change_a_world_silently_is_refused() {
+        let cases = [
+            (OK.replace("[0.0, 0.0, 6.0, 5.0]", "[0.0, 0.0, 6.0, 5.0, 9.0]"), "bounds", "expected 4 numbers, found 5"),
+            (OK.replace("start = [0.5, 2.5]", "start = [0.5, 2.5, 1.0]"), "start", "expected 2 numbers, found 3"),
+            (OK.replace("center = [3.0, 2.5]", "center = [3.0]"), "center", "expected 2 numbers, found 1"),
+            (
+                format!("{OK}\n[[polygon]]\npoints = [[1.0, 1.0], [2.0, 2.0, 0.0], [1.0, 2.0]]\n"),
+                "points",
+                "expected points of 2 numbers, found one of 3",
+            ),
+            (
+                format!("{OK}\n[[polygon]]\npoints = [[2.0, 0.5], [4.0, 1.5], [4.0, 0.5], [2.0, 1.0]]\n"),
+                "polygon[0].points",
+                "two of its edges cross",
+            ),
+            (OK.replace("goal = [5.5, 2.5]", "goal = [5.5, 2.5]\nrobot_radius = 0.001"), "robot_radius", "[0.02, 1) m"),
+            (OK.replace("radius = 0.5", "radius = \"big\""), "radius", "line 9: "),
+        ];
+        for (text, key, rule) in cases {
+            let e = parse(&text).unwrap_err();
+            assert_eq!(e.key, key, "{e}");
+            assert!(e.rule.contains(rule), "{e}");
+        }
+        // A simple polygon, concave and touching nothing, still loads.
+        let u = "\n[[polygon]]\npoints = [[2.0, 3.5], [3.5, 3.5], [3.5, 4.5], [2.0, 4.5], [2.0, 4.3], [3.3, 4.3], [3.3, 3.7], [2.0, 3.7]]\n";
+        assert!(parse(&format!("{OK}{u}")).is_ok());
+        assert!(!self_intersects(&[
+            [0.0, 0.0],
+            [1.0, 0.0],
+            [1.0, 1.0],
+            [0.0, 1.0]
+        ]));
+        assert!(self_intersects(&[
+            [0.0, 0.0],
+            [1.0, 1.0],
+            [1.0, 0.0],
+            [0.0, 1.0]
+        ]));
     }
 
     #[test]
