@@ -65,9 +65,9 @@ fn no_peer_collides_in_the_library_or_the_examples() {
 }
 
 /// Seed 1: the U-traps and the paper environments reached, the walled-in
-/// goals reported. Bug2 and TangentBug time out in environment 2's first
+/// goals reported. Bug2 and TangentBug do not reach environment 2's first
 /// example (the beams lose the boundary in the cluster and the following
-/// circles another), TangentBug in the walled-in trap: those are left out.
+/// goes round another): that one is left out for them.
 #[test]
 fn each_peer_reaches_the_u_traps_and_the_paper_environments() {
     let reached = ["u-trap", "ex-utrap-1-0", "env1-ex1", "env1-ex2", "env2-ex2"];
