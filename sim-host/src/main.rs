@@ -6,7 +6,7 @@ use sim_host::scenario::{collect, Scenario};
 use sim_host::sensor::SensorMode;
 use sim_host::sim::{self, SimConfig};
 use sim_host::{bench, generate, reference, results, svg};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 
 #[derive(Parser)]
@@ -127,6 +127,9 @@ enum Cmd {
         /// (rooms, doorways and furniture; `rooms-<seed>.toml`).
         #[arg(long, value_enum, default_value = "circles")]
         kind: generate::Kind,
+        /// Write over files that exist.
+        #[arg(long)]
+        force: bool,
     },
     /// Write the results page: every planner on every set (BARN,
     /// BARN-tight, the library, the examples and COUNT generated worlds of
@@ -213,6 +216,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
             set_back,
         } => {
             set_back_applies(set_back, &[planner])?;
+            for out in svg_out.iter().chain(&trace) {
+                output_ok(out, std::slice::from_ref(&file))?;
+            }
             let sc = Scenario::load(&file).map_err(|e| e.to_string())?;
             let cfg = SimConfig {
                 planner,
@@ -310,6 +316,11 @@ fn real_main(cli: Cli) -> Result<(), String> {
             let files = collect(&paths)?;
             if files.is_empty() {
                 return Err("no scenario files found".into());
+            }
+            // A bad output is an error before anything runs, not after.
+            if let Some(out) = &json {
+                output_ok(out, &files)?;
+                write(out, "")?;
             }
             // Each planner once, in the order given.
             let mut planners: Vec<PlannerKind> = Vec::new();
@@ -433,19 +444,31 @@ fn real_main(cli: Cli) -> Result<(), String> {
             start,
             goal,
             kind,
+            force,
         } => {
             let (start, goal) = ([start[0], start[1]], [goal[0], goal[1]]);
+            let fresh = |f: &Path| {
+                if f.exists() && !force {
+                    Err(format!("{}: exists; --force writes over it", f.display()))
+                } else {
+                    Ok(())
+                }
+            };
             let Some(count) = count else {
                 let name = out
                     .file_stem()
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_else(|| "random".into());
+                fresh(&out)?;
                 gen_world(kind, &out, &name, start, goal, seed)?;
                 return say(&format!("wrote {}\n", out.display()));
             };
             let seeds = seed..seed
                 .checked_add(count)
                 .ok_or("--seed + --count overflows")?;
+            for s in seeds.clone() {
+                fresh(&out.join(format!("{}-{s}.toml", kind.prefix())))?;
+            }
             for s in seeds.clone() {
                 let name = format!("{}-{s}", kind.prefix());
                 gen_world(
@@ -490,7 +513,7 @@ fn commit() -> String {
 /// loaded back to check it.
 fn gen_world(
     kind: generate::Kind,
-    out: &PathBuf,
+    out: &Path,
     name: &str,
     start: [f64; 2],
     goal: [f64; 2],
@@ -500,11 +523,37 @@ fn gen_world(
     Scenario::load(out).map(|_| ()).map_err(|e| e.to_string())
 }
 
-fn write(path: &PathBuf, text: &str) -> Result<(), String> {
+/// Write `text` to `path` whole or not at all: into a file beside it, then
+/// renamed over it (a run stopped half-way leaves the old file).
+fn write(path: &Path, text: &str) -> Result<(), String> {
     if let Some(dir) = path.parent() {
         if !dir.as_os_str().is_empty() {
             std::fs::create_dir_all(dir).map_err(|e| format!("{}: {e}", dir.display()))?;
         }
     }
-    std::fs::write(path, text).map_err(|e| format!("{}: {e}", path.display()))
+    let mut part = path.as_os_str().to_owned();
+    part.push(".part");
+    let part = PathBuf::from(part);
+    std::fs::write(&part, text)
+        .and_then(|()| std::fs::rename(&part, path))
+        .map_err(|e| {
+            let _ = std::fs::remove_file(&part);
+            format!("{}: {e}", path.display())
+        })
+}
+
+/// An output may not be one of the `inputs` (scenario files) nor a
+/// scenario file by its name: the runs' figures written over a world.
+fn output_ok(out: &Path, inputs: &[PathBuf]) -> Result<(), String> {
+    let same = |a: &Path, b: &Path| match (a.canonicalize(), b.canonicalize()) {
+        (Ok(a), Ok(b)) => a == b,
+        _ => false,
+    };
+    if out.extension().is_some_and(|e| e == "toml") || inputs.iter().any(|i| same(out, i)) {
+        return Err(format!(
+            "{}: an output may not be a scenario file (.toml): it would overwrite a world",
+            out.display()
+        ));
+    }
+    Ok(())
 }

@@ -479,3 +479,53 @@ fn compare_reads_two_benches_run_by_run() {
     assert!(err.contains("after.jsonl:1: not a bench run"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `sim-host ARGS… PATHS…`, which must fail: its standard error.
+fn sim_host_fails(args: &[&str], paths: &[&Path]) -> String {
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(args)
+        .args(paths)
+        .output()
+        .unwrap();
+    assert!(
+        !out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stdout)
+    );
+    String::from_utf8(out.stderr).unwrap()
+}
+
+/// An output never overwrites a world: a scenario file as `--json` or
+/// `--trace` is refused before anything runs; `gen` over a file that
+/// exists asks for `--force`; a `--json` that cannot be written is an
+/// error before the bench runs, not after.
+#[test]
+fn outputs_never_overwrite_inputs() {
+    let (dir, _) = scratch("outputs");
+    let world = dir.join("w.toml");
+    std::fs::copy(corridor(), &world).unwrap();
+    let before = std::fs::read_to_string(&world).unwrap();
+    let e = sim_host_fails(&["run", "--trace"], &[&world, &world]);
+    assert!(e.contains("may not be a scenario file"), "{e}");
+    let e = sim_host_fails(&["bench", "--json", world.to_str().unwrap()], &[&dir]);
+    assert!(e.contains("may not be a scenario file"), "{e}");
+    assert_eq!(std::fs::read_to_string(&world).unwrap(), before);
+    let e = sim_host_fails(&["gen"], &[&world]);
+    assert!(e.contains("exists; --force"), "{e}");
+    assert_eq!(std::fs::read_to_string(&world).unwrap(), before);
+    sim_host(&["gen", "--force"], &[&world]);
+    assert_ne!(std::fs::read_to_string(&world).unwrap(), before);
+    // A folder where the JSON file should go: refused at once.
+    let blocked = dir.join("blocked");
+    std::fs::create_dir_all(blocked.join("runs.jsonl")).unwrap();
+    let e = sim_host_fails(
+        &[
+            "bench",
+            "--json",
+            blocked.join("runs.jsonl").to_str().unwrap(),
+        ],
+        &[&corridor()],
+    );
+    assert!(e.contains("runs.jsonl"), "{e}");
+    std::fs::remove_dir_all(&dir).ok();
+}
