@@ -92,6 +92,14 @@ impl Row {
         self.solvable && self.outcome == Outcome::Unreachable
     }
 
+    /// Whether the run kept the rules whatever it reached: no collision,
+    /// the disc never touched anything, an unsolvable goal not "reached".
+    pub fn safe(&self) -> bool {
+        self.outcome != Outcome::Collision
+            && self.min_clearance > 0.0
+            && (self.solvable || self.outcome != Outcome::Reached)
+    }
+
     /// Whether the outcome is the right one: reached when solvable,
     /// unreachable when not, never a collision.
     pub fn correct(&self) -> bool {

@@ -303,16 +303,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             perfect,
             set_back,
         } => {
-            // Workers with the main thread's stack (8 MiB) rather than
-            // 2 MiB: the `route` planner's map (311,312 bytes with
-            // `routemap`'s capacities) is built and moved on the stack, and
-            // its searches keep their arrays there (planner-core is
-            // allocation-free); a worker overflowed 2 MiB with 8,192 nodes.
-            let mut pool = rayon::ThreadPoolBuilder::new().stack_size(8 << 20);
-            if let Some(j) = jobs {
-                pool = pool.num_threads(j.max(1));
-            }
-            pool.build_global().map_err(|e| e.to_string())?;
+            workers(jobs)?;
             let files = collect(&paths)?;
             if files.is_empty() {
                 return Err("no scenario files found".into());
@@ -400,11 +391,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             planner,
             jobs,
         } => {
-            let mut pool = rayon::ThreadPoolBuilder::new().stack_size(8 << 20);
-            if let Some(j) = jobs {
-                pool = pool.num_threads(j.max(1));
-            }
-            pool.build_global().map_err(|e| e.to_string())?;
+            workers(jobs)?;
             let planners = if planner.is_empty() {
                 results::PLANNERS.to_vec()
             } else {
@@ -488,6 +475,19 @@ fn real_main(cli: Cli) -> Result<(), String> {
             ))
         }
     }
+}
+
+/// The worker threads: `jobs` of them (default one per core), with the
+/// main thread's stack (8 MiB) rather than 2 MiB: the `route` planner's map
+/// (311,312 bytes with `routemap`'s capacities) is built and moved on the
+/// stack, and its searches keep their arrays there (planner-core is
+/// allocation-free); a worker overflowed 2 MiB with 8,192 nodes.
+fn workers(jobs: Option<usize>) -> Result<(), String> {
+    let mut pool = rayon::ThreadPoolBuilder::new().stack_size(8 << 20);
+    if let Some(j) = jobs {
+        pool = pool.num_threads(j.max(1));
+    }
+    pool.build_global().map_err(|e| e.to_string())
 }
 
 /// The commit the tree is at, and whether it has changes beyond it.

@@ -7,19 +7,31 @@ fn corridor() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("scenarios/traps/corridor.toml")
 }
 
-/// `sim-host ARGS… PATHS…`, which must succeed: its standard output.
-fn sim_host(args: &[&str], paths: &[&Path]) -> String {
+/// `sim-host ARGS… PATHS…`, which must `succeed` or fail: its standard
+/// output, or its standard error.
+fn sim_host_ends(succeed: bool, args: &[&str], paths: &[&Path]) -> String {
     let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
         .args(args)
         .args(paths)
         .output()
         .unwrap();
-    assert!(
+    let (want, other) = if succeed {
+        (out.stdout, out.stderr)
+    } else {
+        (out.stderr, out.stdout)
+    };
+    assert_eq!(
         out.status.success(),
+        succeed,
         "{}",
-        String::from_utf8_lossy(&out.stderr)
+        String::from_utf8_lossy(&other)
     );
-    String::from_utf8(out.stdout).unwrap()
+    String::from_utf8(want).unwrap()
+}
+
+/// `sim-host ARGS… PATHS…`, which must succeed: its standard output.
+fn sim_host(args: &[&str], paths: &[&Path]) -> String {
+    sim_host_ends(true, args, paths)
 }
 
 /// A fresh scratch folder for one test, and the JSON-lines file in it.
@@ -482,17 +494,7 @@ fn compare_reads_two_benches_run_by_run() {
 
 /// `sim-host ARGS… PATHS…`, which must fail: its standard error.
 fn sim_host_fails(args: &[&str], paths: &[&Path]) -> String {
-    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
-        .args(args)
-        .args(paths)
-        .output()
-        .unwrap();
-    assert!(
-        !out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stdout)
-    );
-    String::from_utf8(out.stderr).unwrap()
+    sim_host_ends(false, args, paths)
 }
 
 /// An output never overwrites a world: a scenario file as `--json` or

@@ -43,22 +43,13 @@ fn no_peer_collides_in_the_library_or_the_examples() {
     for planner in PEERS {
         for seed in 1..=5 {
             for r in runs(planner, seed) {
-                assert_ne!(
-                    r.outcome,
-                    Outcome::Collision,
-                    "{} seed {seed}: {}",
-                    r.planner,
-                    r.name
-                );
                 assert!(
-                    r.min_clearance > 0.0,
-                    "{} seed {seed}: {}",
+                    r.safe(),
+                    "{} seed {seed}: {} {:?}",
                     r.planner,
-                    r.name
+                    r.name,
+                    r.outcome
                 );
-                if !r.solvable {
-                    assert_ne!(r.outcome, Outcome::Reached, "{}: {}", r.planner, r.name);
-                }
             }
         }
     }

@@ -24,21 +24,13 @@ fn trap_suite_outcomes() {
     assert!(files.len() >= 13, "library has {} files", files.len());
     let rows = run_all(&files, &SimConfig::default(), false).unwrap();
     for r in &rows {
-        assert_ne!(r.outcome, Outcome::Collision, "{} collided", r.name);
         assert!(
-            r.min_clearance > 0.0,
-            "{}: min clearance {}",
+            r.safe(),
+            "{}: {:?}, min clearance {}",
             r.name,
+            r.outcome,
             r.min_clearance
         );
-        if !r.solvable {
-            assert_ne!(
-                r.outcome,
-                Outcome::Reached,
-                "{} reached an unsolvable goal",
-                r.name
-            );
-        }
     }
     let reached = |name: &str| {
         rows.iter()
