@@ -175,7 +175,7 @@ pub fn free_way_mm(
     let dir = dir.rotated(heading);
     // With the sensors set back, the clearance: with 20 mm the benches met
     // collisions that 40 mm do not (a beam reads one point of a face, and
-    // the face reaches on beyond it; docs/bench.md, "Sensors set back").
+    // the face reaches on beyond it; the commit history, "Sensors set back").
     let rb = if cfg.set_back() {
         rs
     } else {
@@ -243,7 +243,7 @@ const FLANK_REACH_MM: u16 = 300;
 /// stop the rover beside what it has just passed.
 const FLANK_MARGIN_MM: i32 = 20;
 
-/// Ours (the safety rule's blind flank, docs/bench.md "The flank"): the
+/// Ours (the safety rule's blind flank, the commit history "The flank"): the
 /// points the guard's beams saw beside the way during the advances, world
 /// mm. The five beams cover ±40°; after a turn towards a side the body's
 /// first centimetres sweep ground within `r / sin 40°` of the centre that

@@ -249,7 +249,7 @@ impl ConfigBuilder {
     /// | ξ_MP | 1 | paper eq. 12 |
     /// | ξ (off-sensor) | 1 | paper eq. 14 |
     /// | goal tolerance | 50 mm | ours |
-    /// | clearance | 40 mm | ours: lateral margin of the safety rule (§5) and of the collision corridor (eqs. 7, 8); 40 rather than 20 mm because a beam samples one point of an obstacle and a corner between the beams reaches past it (docs/bench.md) |
+    /// | clearance | 40 mm | ours: lateral margin of the safety rule (§5) and of the collision corridor (eqs. 7, 8); 40 rather than 20 mm because a beam samples one point of an obstacle and a corner between the beams reaches past it (the commit history) |
     /// | stand-off | 100 mm | ours: obstacles ahead stay this far beyond the rim (with sensors on the rim, their minimum range: never in fold-back) |
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
@@ -292,10 +292,10 @@ impl ConfigBuilder {
     /// [`ConfigBuilder::sensor_offset_mm`] places them. Ours: a sensor on
     /// the rim reads an obstacle within 100 mm of its face as farther
     /// (fold-back), which is what the benches' last collisions were
-    /// (docs/bench.md, "Known failures"); set back, nothing outside the
+    /// (the commit history, "Known failures"); set back, nothing outside the
     /// body is ever that near a face. Whenever the faces are that far
     /// behind the rim (whichever way the offset was set), the planner
-    /// follows the rules measured with them (docs/bench.md, "Sensors set
+    /// follows the rules measured with them (the commit history, "Sensors set
     /// back"): the datasheet table interpolated in 1/d
     /// ([`Calibration::from_points_reciprocal`]), what the view reads
     /// within 100 mm of the rim kept as flank points, flank points kept

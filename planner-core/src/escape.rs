@@ -49,7 +49,7 @@
 //! and lets it go as far back as it must (a shortened retreat step after a
 //! turn of more than 20° waits a cycle: the planner's retreat rule).
 //! Measured with the defaults [`RETREAT_MM`] and [`RETREAT_PER_DROP_MM`]
-//! (docs/bench.md, "The retreat"): shorter paths, more goals reached, no
+//! (the commit history, "The retreat"): shorter paths, more goals reached, no
 //! more collisions than without it (`retreat_mm` 0).
 //!
 //! Give-up: when `give_up_drops` virtual obstacles have been dropped, or
@@ -62,7 +62,7 @@
 //! its count started afresh: [`Escape::again`]); without it the goal is
 //! reported unreachable at once. The default budget, 200 cycles, hands
 //! over once a second 200 would do less than the follower
-//! (docs/bench.md).
+//! (the commit history).
 
 use crate::fixed::{
     box_within, inverse_square_force, isqrt, within, Angle, Force, Point, FORCE_ONE, FORCE_SHIFT,
@@ -76,7 +76,7 @@ pub const VIRTUAL_CAPACITY: usize = 24;
 /// A drop nearer than this (mm) to a held virtual obstacle strengthens it,
 /// for the cost of one term in every later sum. 40 mm rather than 16: with
 /// 16 the STM32's worst replayed step went over issue 6's 3,000
-/// instructions, at outcomes within noise of these (docs/bench.md, "The
+/// instructions, at outcomes within noise of these (the commit history, "The
 /// inverse-cube push").
 pub const VIRTUAL_MERGE_MM: u16 = 40;
 /// A virtual obstacle whose push is below this (Q10) is skipped.
@@ -85,7 +85,7 @@ pub const VIRTUAL_MIN_PUSH: i32 = FORCE_ONE / 32;
 /// units, 32 times the attraction; the default is 4.4). It bounds the
 /// products of [`Escape::force`] below 2^32.
 pub const MAX_PUSH: i32 = u16::MAX as i32;
-/// The default [`EscapeConfig::retreat_mm`], mm (measured: docs/bench.md,
+/// The default [`EscapeConfig::retreat_mm`], mm (measured: the commit history,
 /// "The retreat").
 pub const RETREAT_MM: u16 = 100;
 /// The default [`EscapeConfig::retreat_per_drop_mm`], mm.

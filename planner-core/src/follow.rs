@@ -5,7 +5,7 @@
 //! The virtual obstacles fill a pit until the rover spills out of it, but
 //! in a cluster of large obstacles the rover can work along the cluster's
 //! face for the whole give-up budget while the way lies round its far side
-//! (docs/bench.md, "Worlds no rule was tuned on"). Giving up there reports
+//! (the commit history, "Worlds no rule was tuned on"). Giving up there reports
 //! a reachable goal unreachable. Instead, once the escape gives up, the
 //! rover goes on as DistBug does, and the potential field is not used
 //! again for this goal:
@@ -79,7 +79,7 @@ pub const SIGHT_MM: u16 = 300;
 /// the follower going round islands that do not hold the goal). No other
 /// set reaches fewer goals at 5 than at 12; the box worlds report 8
 /// reachable goals unreachable of 1,000 at 5 and 6 (5 at 12), 15 at 4
-/// (docs/bench.md, "Walled worlds"; measured before the circle rule, with
+/// (the commit history, "Walled worlds"; measured before the circle rule, with
 /// which 996 of the walled runs are reported).
 pub const BUDGET_GIVE_UPS: u16 = 5;
 /// [`BUDGET_GIVE_UPS`] in the second round, after a first loop handed back
@@ -87,7 +87,7 @@ pub const BUDGET_GIVE_UPS: u16 = 5;
 /// confirms the first loop: with the first round at 6, 3 give-up budgets
 /// report 986 of the 1,000 walled runs against 958 at 6, and change no
 /// reached run of any set (two box-world timeouts become reports: 8
-/// reachable goals reported unreachable of 1,000, 6 at 6; docs/bench.md,
+/// reachable goals reported unreachable of 1,000, 6 at 6; the commit history,
 /// "Walled worlds").
 pub const SECOND_GIVE_UPS: u16 = 3;
 /// Cycles in a row with nothing in sight after which the boundary is lost:

@@ -407,7 +407,7 @@ impl Planner {
         // Ours (the wedge): four full turns on the spot without a step. In a
         // pocket whose walls are nearer than the sensors' minimum range,
         // every heading has a beam in the disc's way that reads too close,
-        // so no heading is ever free (docs/bench.md, "The wedge"). The way
+        // so no heading is ever free (the commit history, "The wedge"). The way
         // the rover came in is: the disc has just swept it. Back out along
         // it, once, and let the guard trust it.
         if !moved && self.turned_in_place >= 4 * FULL_TURN {

@@ -21,7 +21,7 @@
 //! cycle's collision points (the paper stores every one). That bounds a
 //! cycle's work to one store, whatever the five beams see, and spreads the
 //! slots over the last [`MEMORY_CAPACITY`] distinct obstacles met rather
-//! than the last few cycles along one wall (see `docs/bench.md`, "One point
+//! than the last few cycles along one wall (see the commit history, "One point
 //! a cycle", for what it changed).
 
 use crate::fixed::{box_within, Angle, Point};

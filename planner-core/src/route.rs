@@ -157,19 +157,19 @@ pub struct RouteConfig {
     /// the sensors' noise or a bad turn rather than the map: box-23 of the
     /// box worlds with seed 2 blocked its way in a gap and was reported
     /// unreachable; with one round more it reached the goal
-    /// (docs/bench.md, "The route layer").
+    /// (the commit history, "The route layer").
     pub unblock_rounds: u8,
 }
 
 impl Default for RouteConfig {
     /// ρ₀ = 200 mm (with 300, the classical APF baseline's ρ, the safest
     /// candidate ran wider of every obstacle than the preferred clearance
-    /// asks, for longer paths: docs/bench.md "The route layer"), 25 % slack
+    /// asks, for longer paths: the commit history "The route layer"), 25 % slack
     /// (the product's path-length aim), four candidates, waypoints passed
     /// within 250 mm (a step or so: the planner does not stop at each),
     /// any edge clearance, 100 cycles a leg, waypoints within 20 mm of a
     /// straight leg merged into it (half the planner's clearance; 0 and
-    /// 40 mm measured worse, docs/bench.md "The route layer"), the blocks
+    /// 40 mm measured worse, the commit history "The route layer"), the blocks
     /// forgotten once.
     fn default() -> Self {
         RouteConfig {
@@ -631,7 +631,7 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
     /// seeds of five the rover turned about at the mouth, 3.1–3.8× the
     /// reference). Roomier edges keep `pass_mm`: with `pass_mm` cut to
     /// the spare before every edge with less than it to spare, the
-    /// examples' routes were longer (docs/bench.md, "The route layer").
+    /// examples' routes were longer (the commit history, "The route layer").
     fn pass_mm(&self, k: usize) -> u16 {
         let (Some(&a), Some(&b)) = (self.route.get(k), self.route.get(k + 1)) else {
             return self.cfg.pass_mm;

@@ -434,7 +434,7 @@ pub type Readings = [Reading; SENSOR_COUNT];
 /// and that comparison is what stops advances into flank obstacles the
 /// outer beam reads in its fold-back region after a turn (comparing with
 /// the sensor that looked the same way instead: 13 collisions in 1,500
-/// BARN-tight runs instead of 2, docs/bench.md). A rover held on one spot
+/// BARN-tight runs instead of 2, the commit history). A rover held on one spot
 /// ([`Self::look`]'s `by_way`, see the pocket rule in `Planner::step_raw`)
 /// compares each sensor with the one that looked its way the cycle before,
 /// if one did (turning 40° left, the −40° sensor with the 0° one): else each

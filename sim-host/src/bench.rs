@@ -403,7 +403,7 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
 
 /// The mean path ratio split by whether the run dropped virtual obstacles:
 /// the field's own paths against those with an escape's detours, which is
-/// where a planner's mean ratio is lost or won (docs/bench.md, "Where the
+/// where a planner's mean ratio is lost or won (the commit history, "Where the
 /// path ratio goes"). `None` where no reached run dropped any (a planner
 /// without the escape; the line's ratio is already the field's own).
 pub fn escape_split(rows: &[Row]) -> Option<String> {
@@ -510,7 +510,7 @@ pub fn load_rows(path: &Path) -> Result<Vec<Row>, String> {
 ///
 /// Why: a change's totals hide runs that moved both ways (13 reached runs
 /// becoming timeouts behind 10 timeouts becoming reached), and a few runs
-/// moving is within what another seed would move (docs/bench.md, "The
+/// moving is within what another seed would move (the commit history, "The
 /// flank margin and the stuck window, swept").
 pub fn compare(before: &[Row], after: &[Row], list_runs: bool) -> Result<String, String> {
     type Key<'a> = (&'a str, &'a str, u64);

@@ -88,7 +88,7 @@ const MARGIN_M: f64 = 0.04;
 /// route exists, m (`RouteConfig::preferred_clearance_mm`): twice the
 /// planner's clearance. With routes at 40 mm, one in barn-193 (seed 1) led
 /// the rover to turn beside a 10 cm block none of its beams had seen, then
-/// into it (docs/bench.md, "The route layer").
+/// into it (the commit history, "The route layer").
 pub const PREFERRED_MARGIN_M: f64 = 0.08;
 
 /// The graph for `sc` (static obstacles only), with the start and the goal

@@ -2,7 +2,7 @@
 //! same seed and six circles moving back and forth across the straight
 //! way). The planner assumes a still world and its five beams look ahead
 //! only, so a circle that comes at the rover's side or back reaches it:
-//! over five seeds most of these runs end so (docs/bench.md, "Moving
+//! over five seeds most of these runs end so (the commit history, "Moving
 //! obstacles"). What should hold is the guard's part: the rover does not
 //! drive into anything its beams look at, moving or not, and never touches
 //! the still world. It holds on the worlds and seeds below; the guard takes

@@ -7,7 +7,7 @@
 //! ours (positions within ±32.767 m) are checked in `scenario`'s unit tests;
 //! this is the net under them. Collisions are not counted against the
 //! planners here: these worlds hold moving obstacles at any speed, and posts
-//! of a few centimetres that the five beams pass by (docs/bench.md, "Known
+//! of a few centimetres that the five beams pass by (the commit history, "Known
 //! failures").
 
 use clap::ValueEnum;

@@ -1,7 +1,7 @@
 //! The trap suite and the paper environments, end to end: every run is
 //! collision-free, the walled-in goal is never "reached", and the scenarios
 //! the product planner handles today are reached (all but the narrow
-//! passage, which times out). The full table is in docs/bench.md
+//! passage, which times out). The full table is in the commit history
 //! (regenerate with the command there).
 
 use sim_host::bench::{run_all, totals};
@@ -95,7 +95,7 @@ fn classical_apf_fails_where_the_papers_say() {
 
 /// The route layer over the known map (`route`) drives the traps where the
 /// sensing planner alone detours (the u-trap, the dead end, the rooms and
-/// the comb: 2.6–6.0× the reference with `eapf`, docs/bench.md) within
+/// the comb: 2.6–6.0× the reference with `eapf`, the commit history) within
 /// 1.25× of the shortest path, without a collision, and the corridor and
 /// `gnron` (a route through a gap) within 1.25× too; the walled-in goal has
 /// no route, and is still not reached.
@@ -173,7 +173,7 @@ fn generated(seed: u64) -> (String, String) {
 /// learnt to look towards the goal past the boundary's nearest point
 /// (`follow`'s look). Now it reaches the goal. (The follower's first test
 /// world, gen-144 with seed 1, reached before the look and times out
-/// with it: docs/bench.md.) The walled-in goal is still reported
+/// with it: the commit history.) The walled-in goal is still reported
 /// unreachable: the follower goes round its wall and closes the loop.
 #[test]
 fn the_boundary_follower_reaches_a_goal_the_escape_gave_up_on() {
@@ -225,7 +225,7 @@ fn longest_on_one_spot(trace: &[sim_host::sim::TraceRow]) -> f64 {
 /// one spot without the rule, 132.4 s with it (the escape's rocking in the
 /// same pocket before it gives up, steps of 1–6 cm); 53.0 s since the
 /// escape hands over after 200 cycles and the follower's turns count for
-/// the fold-back filter (docs/bench.md); 44.7 s with the wedge rule.
+/// the fold-back filter (the commit history); 44.7 s with the wedge rule.
 #[test]
 fn the_boundary_follower_does_not_retake_a_refused_turn() {
     let stuck_s = longest_on_one_spot_in(117, 1);
@@ -274,7 +274,7 @@ fn the_follower_turning_in_a_pocket_trusts_the_beams_that_looked_there() {
 /// beam in the disc's way that reads too close, and turned on the spot for
 /// 2,427 cycles until the follower's budget called the goal unreachable.
 /// Now after four full turns it backs out the way it came (planner-core's
-/// wedge rule, `Planner::back_out`; docs/bench.md, "The wedge").
+/// wedge rule, `Planner::back_out`; the commit history, "The wedge").
 #[test]
 fn a_wedged_rover_backs_out_the_way_it_came() {
     let stuck_s = longest_on_one_spot_in(269, 3);
@@ -359,13 +359,13 @@ fn box_world_followers_leave_their_circles() {
     }
 }
 
-/// The three collisions with the sensors on the rim (docs/bench.md, "Known
+/// The three collisions with the sensors on the rim (the commit history, "Known
 /// failures"): box corners beyond the beams that no view saw, grazed after
 /// turns on one spot, and a fold-back read after an advance. Ignored until
 /// a rule keeps them off: `cargo test --release -p sim-host --test
 /// trap_suite -- --ignored` runs them.
 #[test]
-#[ignore = "collides: docs/bench.md, Known failures, collisions in box worlds"]
+#[ignore = "collides: the commit history, Known failures, collisions in box worlds"]
 fn box_worlds_known_collisions() {
     for (name, seed, outcome) in known_collision_box_runs(false) {
         assert_ne!(outcome, Outcome::Collision, "{name} with seed {seed}");
@@ -373,7 +373,7 @@ fn box_worlds_known_collisions() {
 }
 
 /// The same runs with the sensors set back from the rim by their minimum
-/// range (`ConfigBuilder::sensors_set_back`, docs/bench.md "Sensors set
+/// range (`ConfigBuilder::sensors_set_back`, the commit history "Sensors set
 /// back"): nothing outside the body is in their fold-back region, and none
 /// of the three collides.
 #[test]
@@ -387,12 +387,12 @@ fn set_back_sensors_keep_off_the_known_box_world_collisions() {
 /// Indoor floors (`gen --kind rooms --seed 1`) whose reachable goal is
 /// reported unreachable with seed 1. In rooms-19 the follower passes a
 /// doorway beside its hit point and counts that as a loop round the
-/// boundary, twice (docs/bench.md, "Indoor floors"); rooms-22 and rooms-26
+/// boundary, twice (the commit history, "Indoor floors"); rooms-22 and rooms-26
 /// were not traced. Ignored until a rule mends them:
 /// `cargo test --release -p sim-host --test trap_suite -- --ignored` runs
 /// them.
 #[test]
-#[ignore = "reported unreachable: docs/bench.md, Indoor floors"]
+#[ignore = "reported unreachable: the commit history, Indoor floors"]
 fn indoor_floor_goals_wrongly_reported_unreachable() {
     let runs = [(19, 1), (22, 1), (26, 1)];
     for (name, seed, outcome) in generated_runs(sim_host::generate::Kind::Rooms, &runs, false) {
@@ -433,7 +433,7 @@ fn assert_walled_reported(world_seeds: &[u64]) {
     }
 }
 
-/// The first twelve walled worlds (docs/bench.md, "Walled worlds"). With
+/// The first twelve walled worlds (the commit history, "Walled worlds"). With
 /// the follower's budget at 12 give-up budgets instead of 6 (5 now,
 /// `follow::BUDGET_GIVE_UPS`), walled-11 ran out of the simulator's budget
 /// first (checked), the rover going round islands that do not hold the

@@ -125,7 +125,7 @@ pub fn run_guards(planner: &mut Planner, guards: &[GuardSample]) -> u8 {
 /// step either way, as it did before the guard was in the traces. (Ending
 /// the advance where the guard says stop, as the executor does, moves the
 /// dead end's trace to steps that cost the STM32 up to 3,149 instructions,
-/// over issue 6's 3,000: `docs/avr-cycles.md`.)
+/// over issue 6's 3,000: the commit history.)
 pub fn record(sc: &Scenario, adc: AdcProfile, steps: usize, seed: u64) -> Trace {
     record_with(sc, adc, steps, seed, false)
 }

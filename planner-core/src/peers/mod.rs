@@ -195,8 +195,9 @@ impl Senses {
         )
     }
 
-    /// The end of beam `i`'s free way from `pose` (obstacle or reach,
-    /// less the disc and clearance) and whether it met an obstacle.
+    /// Where beam `i` ends, seen from `pose`: on the obstacle it reads (at
+    /// the sensor face for "too close"), or at its reach; and whether it
+    /// met an obstacle.
     pub fn beam_end(&self, pose: Pose, i: usize) -> (Point, bool) {
         let cfg = &self.config;
         let angle = cfg.sensor_angles[i.min(SENSOR_COUNT - 1)];
