@@ -7,6 +7,7 @@ use crate::routemap::{self, ROUTE_EDGES, ROUTE_NODES};
 use crate::scenario::Scenario;
 use planner_core::apf::{ApfConfig, ApfPlanner};
 use planner_core::fixed::Point;
+use planner_core::peers::freespace::FreeSpace;
 use planner_core::peers::{Bug2, TangentBug, Vfh};
 use planner_core::route::{RouteConfig, RoutePlanner};
 use planner_core::{
@@ -43,6 +44,11 @@ pub enum PlannerKind {
     /// VFH+ (Ulrich & Borenstein 1998), a peer: certainty grid, polar
     /// histogram, valleys.
     Vfh,
+    /// Planning with the free-space assumption over a grid the beams fill
+    /// (Koenig, Tovey & Smirnov 2003).
+    #[value(name = "freespace")]
+    #[serde(rename = "freespace")]
+    FreeSpace,
 }
 
 impl PlannerKind {
@@ -63,6 +69,7 @@ impl PlannerKind {
             PlannerKind::Bug2 => "bug2",
             PlannerKind::TangentBug => "tangentbug",
             PlannerKind::Vfh => "vfh",
+            PlannerKind::FreeSpace => "freespace",
         }
     }
 }
@@ -155,6 +162,10 @@ impl SimPlanner {
             PlannerKind::Bug2 => Core::Other(Box::new(Bug2::new(cfg, goal))),
             PlannerKind::TangentBug => Core::Other(Box::new(TangentBug::new(cfg, goal))),
             PlannerKind::Vfh => Core::Other(Box::new(Vfh::new(cfg, goal))),
+            PlannerKind::FreeSpace => {
+                let start = to_point(V2::new(sc.start[0], sc.start[1]));
+                Core::Other(Box::new(FreeSpace::<256>::new(cfg, start, goal)))
+            }
             PlannerKind::Route => {
                 let keep_m = sc.robot_radius + routemap::PREFERRED_MARGIN_M;
                 let route = RouteConfig {

@@ -15,9 +15,10 @@ use std::fmt::Write;
 use std::path::{Path, PathBuf};
 
 /// Every planner the page compares, the product first.
-pub const PLANNERS: [PlannerKind; 9] = [
+pub const PLANNERS: [PlannerKind; 10] = [
     PlannerKind::Eapf,
     PlannerKind::EapfPlain,
+    PlannerKind::FreeSpace,
     PlannerKind::Bug2,
     PlannerKind::TangentBug,
     PlannerKind::Vfh,

@@ -105,3 +105,38 @@ fn peers_have_names_and_their_runs_have_spl() {
         assert!(time >= 1.0 / spl - 1e-9, "{time} against {spl}");
     }
 }
+
+/// The free-space planner (a candidate for the product's escape, not a
+/// peer): no collision in the library or the examples on five seeds; on
+/// seed 1 the traps, the paper environments and the rooms reached, the
+/// walled-in goals reported. The narrow passage is not: its gap is
+/// narrower than the plan's disc plus margin, and the squeezed wave's way
+/// through it is refused by the safety rule until the budget runs out.
+#[test]
+fn freespace_is_safe_in_the_library_and_reaches_the_traps() {
+    let planner = PlannerKind::FreeSpace;
+    assert_eq!(planner.name(), "freespace");
+    for seed in 1..=5 {
+        for r in runs(planner, seed) {
+            assert!(r.safe(), "seed {seed}: {} {:?}", r.name, r.outcome);
+        }
+    }
+    let rows = runs(planner, 1);
+    for name in [
+        "u-trap",
+        "ex-utrap-1-0",
+        "env1-ex1",
+        "env1-ex2",
+        "env2-ex1",
+        "env2-ex2",
+        "rooms",
+        "ex-rooms-1-0",
+        "comb",
+        "dead-end",
+    ] {
+        assert_eq!(outcome(&rows, name), Outcome::Reached, "{name}");
+    }
+    for name in ["walled-in", "ex-enclosed-1-0"] {
+        assert_eq!(outcome(&rows, name), Outcome::Unreachable, "{name}");
+    }
+}

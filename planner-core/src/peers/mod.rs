@@ -21,6 +21,7 @@
 //!   goal is unreachable.
 
 pub mod bug2;
+pub mod freespace;
 pub mod tangent_bug;
 pub mod vfh;
 
@@ -195,19 +196,27 @@ impl Senses {
         )
     }
 
-    /// Where beam `i` ends, seen from `pose`: on the obstacle it reads (at
-    /// the sensor face for "too close"), or at its reach; and whether it
-    /// met an obstacle.
+    /// Where beam `i` ends, seen from `pose`: see [`beam_end`].
     pub fn beam_end(&self, pose: Pose, i: usize) -> (Point, bool) {
-        let cfg = &self.config;
-        let angle = cfg.sensor_angles[i.min(SENSOR_COUNT - 1)];
-        let (far, hit) = match self.readings[i.min(SENSOR_COUNT - 1)] {
-            Reading::Range(mm) => (cfg.sensor_offset_mm.saturating_add(mm), true),
-            Reading::Clear => (cfg.sensor_offset_mm + cfg.sensor_range_mm, false),
-            Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm, true),
-        };
-        (pose.position.offset(pose.heading.add(angle), far), hit)
+        beam_end(&self.config, &self.readings, pose, i)
     }
+}
+
+/// Where beam `i` ends, seen from `pose` with `readings`: on the obstacle
+/// it reads (at the sensor face for "too close"), or at its reach; and
+/// whether it met an obstacle.
+pub fn beam_end(cfg: &Config, readings: &Readings, pose: Pose, i: usize) -> (Point, bool) {
+    let i = i.min(SENSOR_COUNT - 1);
+    let (far, hit) = match readings[i] {
+        Reading::Range(mm) => (cfg.sensor_offset_mm.saturating_add(mm), true),
+        Reading::Clear => (cfg.sensor_offset_mm + cfg.sensor_range_mm, false),
+        Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm, true),
+    };
+    (
+        pose.position
+            .offset(pose.heading.add(cfg.sensor_angles[i]), far),
+        hit,
+    )
 }
 
 /// How many points [`Seen`] keeps.
@@ -452,6 +461,18 @@ macro_rules! navigator {
 navigator!(Bug2);
 navigator!(TangentBug);
 navigator!(Vfh);
+
+impl<const N: usize> Navigator for freespace::FreeSpace<N> {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        freespace::FreeSpace::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        self.senses.guard(raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        self.senses.config()
+    }
+}
 
 #[cfg(test)]
 pub(crate) mod tests {
