@@ -1,6 +1,7 @@
 //! `sim-host`: run the planner-core in simulated worlds.
 
 use clap::{Parser, Subcommand};
+use sim_host::fault::Fault;
 use sim_host::planners::PlannerKind;
 use sim_host::scenario::{collect, Scenario};
 use sim_host::sensor::SensorMode;
@@ -46,6 +47,12 @@ enum Cmd {
         /// planners: `liquid` and `liquid-online` refuse it).
         #[arg(long)]
         set_back: bool,
+        /// Inject a fault (repeatable): dead, stuck, stuck-clear, spikes,
+        /// dropouts, crosstalk, ambient, slip, stall, encoder-glitch,
+        /// overshoot, latency; parameters as `NAME:KEY=VALUE,…` (defaults
+        /// and keys in sim-host/README.md).
+        #[arg(long = "fault", value_name = "NAME[:KEY=VALUE,…]")]
+        faults: Vec<Fault>,
     },
     /// Every scenario under the given files or folders, in parallel.
     Bench {
@@ -85,6 +92,12 @@ enum Cmd {
         /// sensing planners).
         #[arg(long)]
         set_back: bool,
+        /// Inject a fault (repeatable): dead, stuck, stuck-clear, spikes,
+        /// dropouts, crosstalk, ambient, slip, stall, encoder-glitch,
+        /// overshoot, latency; parameters as `NAME:KEY=VALUE,…` (defaults
+        /// and keys in sim-host/README.md).
+        #[arg(long = "fault", value_name = "NAME[:KEY=VALUE,…]")]
+        faults: Vec<Fault>,
     },
     /// Two `bench --json` files of the same runs (two builds or settings),
     /// run by run: both totals over the runs in both, and which outcomes
@@ -214,6 +227,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             trace,
             perfect,
             set_back,
+            faults,
         } => {
             set_back_applies(set_back, &[planner])?;
             for out in svg_out.iter().chain(&trace) {
@@ -225,6 +239,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 seed,
                 sensors: sensors(perfect),
                 set_back,
+                faults: faults.clone(),
                 ..SimConfig::default()
             };
             let refp = reference::shortest_path(&sc);
@@ -236,6 +251,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
             );
             if set_back {
                 report += "sensors      set back from the rim by their minimum range\n";
+            }
+            for f in &faults {
+                report += &format!("fault        {f}\n");
             }
             report += &format!(
                 "outcome      {}\nsteps        {}\npath_length  {:.3} m\n",
@@ -302,6 +320,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             summary,
             perfect,
             set_back,
+            faults,
         } => {
             workers(jobs)?;
             let files = collect(&paths)?;
@@ -337,6 +356,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                         seed,
                         sensors: sensors(perfect),
                         set_back,
+                        faults: faults.clone(),
                         ..SimConfig::default()
                     };
                     let mut these = match &pictures {
