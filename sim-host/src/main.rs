@@ -175,6 +175,35 @@ enum Cmd {
         #[arg(long)]
         jobs: Option<usize>,
     },
+    /// Write the faults page: one planner on every still-world set under
+    /// no fault and each fault of `--fault` with its defaults, a table of
+    /// fault × set.
+    Faults {
+        /// The page to write.
+        #[arg(long, default_value = "docs/faults.md")]
+        out: PathBuf,
+        /// The folder that holds the shared sets.
+        #[arg(long, default_value = "../shared/scenarios")]
+        shared: PathBuf,
+        /// The scenario library.
+        #[arg(long, default_value = "sim-host/scenarios")]
+        library: PathBuf,
+        /// Generated worlds of each kind.
+        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
+        count: u64,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100))]
+        seeds: u64,
+        /// Planner.
+        #[arg(long, value_enum, default_value = "eapf")]
+        planner: PlannerKind,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
 }
 
 fn main() -> ExitCode {
@@ -438,6 +467,39 @@ fn real_main(cli: Cli) -> Result<(), String> {
             }
             write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
+            say(&format!(
+                "wrote {} ({runs} runs in {:.0} s)\n",
+                out.display(),
+                started.elapsed().as_secs_f64()
+            ))
+        }
+        Cmd::Faults {
+            out,
+            shared,
+            library,
+            count,
+            seed,
+            seeds,
+            planner,
+            jobs,
+        } => {
+            workers(jobs)?;
+            let sets = results::sets(&shared, &library, count)?;
+            output_ok(&out, &[])?;
+            let started = std::time::Instant::now();
+            let rows = results::run_faults(&sets, planner, seed, seeds, true);
+            let made = results::Provenance {
+                command: std::iter::once("sim-host".to_string())
+                    .chain(std::env::args().skip(1))
+                    .collect::<Vec<_>>()
+                    .join(" "),
+                commit: commit(),
+            };
+            write(
+                &out,
+                &results::fault_page(&sets, &rows, planner, seed, seeds, &made),
+            )?;
+            let runs: usize = rows.iter().flat_map(|(_, r)| r).map(Vec::len).sum();
             say(&format!(
                 "wrote {} ({runs} runs in {:.0} s)\n",
                 out.display(),
