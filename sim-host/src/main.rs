@@ -152,16 +152,8 @@ enum Cmd {
         /// The page to write; the pictures go into `results/` beside it.
         #[arg(long, default_value = "docs/results.md")]
         out: PathBuf,
-        /// The folder that holds the shared sets (`barn`, `barn-tight`,
-        /// `examples`).
-        #[arg(long, default_value = "../shared/scenarios")]
-        shared: PathBuf,
-        /// The scenario library.
-        #[arg(long, default_value = "sim-host/scenarios")]
-        library: PathBuf,
-        /// Generated worlds of each kind.
-        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
-        count: u64,
+        #[command(flatten)]
+        worlds: Worlds,
         /// First seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -182,15 +174,8 @@ enum Cmd {
         /// The page to write.
         #[arg(long, default_value = "docs/faults.md")]
         out: PathBuf,
-        /// The folder that holds the shared sets.
-        #[arg(long, default_value = "../shared/scenarios")]
-        shared: PathBuf,
-        /// The scenario library.
-        #[arg(long, default_value = "sim-host/scenarios")]
-        library: PathBuf,
-        /// Generated worlds of each kind.
-        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
-        count: u64,
+        #[command(flatten)]
+        worlds: Worlds,
         /// First seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -204,6 +189,39 @@ enum Cmd {
         #[arg(long)]
         jobs: Option<usize>,
     },
+}
+
+/// What writes a page: this command line and the commit.
+fn provenance() -> results::Provenance {
+    results::Provenance {
+        command: std::iter::once("sim-host".to_string())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" "),
+        commit: commit(),
+    }
+}
+
+/// The sets of worlds the results and faults pages run over.
+#[derive(clap::Args)]
+struct Worlds {
+    /// The folder that holds the shared sets (`barn`, `barn-tight`,
+    /// `examples`).
+    #[arg(long, default_value = "../shared/scenarios")]
+    shared: PathBuf,
+    /// The scenario library.
+    #[arg(long, default_value = "sim-host/scenarios")]
+    library: PathBuf,
+    /// Generated worlds of each kind.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    count: u64,
+}
+
+impl Worlds {
+    /// The sets.
+    fn sets(&self) -> Result<Vec<results::Set>, String> {
+        results::sets(&self.shared, &self.library, self.count)
+    }
 }
 
 fn main() -> ExitCode {
@@ -432,9 +450,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
         }
         Cmd::Results {
             out,
-            shared,
-            library,
-            count,
+            worlds,
             seed,
             seeds,
             planner,
@@ -446,20 +462,14 @@ fn real_main(cli: Cli) -> Result<(), String> {
             } else {
                 planner
             };
-            let sets = results::sets(&shared, &library, count)?;
+            let sets = worlds.sets()?;
             // A bad output path is an error before anything runs.
             let pictures = out.with_file_name("results");
             std::fs::create_dir_all(&pictures)
                 .map_err(|e| format!("{}: {e}", pictures.display()))?;
             let started = std::time::Instant::now();
             let rows = results::run(&sets, &planners, seed, seeds, true);
-            let made = results::Provenance {
-                command: std::iter::once("sim-host".to_string())
-                    .chain(std::env::args().skip(1))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-                commit: commit(),
-            };
+            let made = provenance();
             let (page, svgs) =
                 results::page(&sets, &rows, &planners, seed, seeds, "results", &made);
             for (file, svg) in svgs {
@@ -475,26 +485,18 @@ fn real_main(cli: Cli) -> Result<(), String> {
         }
         Cmd::Faults {
             out,
-            shared,
-            library,
-            count,
+            worlds,
             seed,
             seeds,
             planner,
             jobs,
         } => {
             workers(jobs)?;
-            let sets = results::sets(&shared, &library, count)?;
+            let sets = worlds.sets()?;
             output_ok(&out, &[])?;
             let started = std::time::Instant::now();
             let rows = results::run_faults(&sets, planner, seed, seeds, true);
-            let made = results::Provenance {
-                command: std::iter::once("sim-host".to_string())
-                    .chain(std::env::args().skip(1))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-                commit: commit(),
-            };
+            let made = provenance();
             write(
                 &out,
                 &results::fault_page(&sets, &rows, planner, seed, seeds, &made),

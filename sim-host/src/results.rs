@@ -125,17 +125,7 @@ pub fn run(
 ) -> Vec<Vec<Row>> {
     let runs: usize =
         sets.iter().map(|s| s.worlds.len()).sum::<usize>() * planners.len() * seeds as usize;
-    let bar = if progress {
-        ProgressBar::new(runs as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(runs, progress);
     let out = sets
         .iter()
         .map(|set| {
@@ -179,6 +169,22 @@ pub fn run(
         .collect();
     bar.finish_and_clear();
     out
+}
+
+/// One progress bar over `runs` runs (hidden without `progress`).
+fn progress_bar(runs: usize, progress: bool) -> ProgressBar {
+    let bar = if progress {
+        ProgressBar::new(runs as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
 }
 
 /// The planners of `rows` ranked by SPL (best first), each with its totals.
@@ -383,17 +389,7 @@ pub fn run_faults(
         .chain(fault::NAMES.iter().map(|n| Fault::named(n)))
         .collect();
     let runs = still.iter().map(|s| s.worlds.len()).sum::<usize>() * faults.len() * seeds as usize;
-    let bar = if progress {
-        ProgressBar::new(runs as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(runs, progress);
     let out = faults
         .iter()
         .map(|fault| {
