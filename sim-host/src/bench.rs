@@ -53,6 +53,13 @@ pub struct Row {
     /// which [`load_rows`] fills in).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub spl: Option<f64>,
+    /// Cycles the planner stopped for a sensor fault (0 in rows written
+    /// before it was recorded).
+    #[serde(default)]
+    pub sensor_faults: usize,
+    /// The faults injected (`--fault`), as their names and parameters.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub faults: Vec<String>,
 }
 
 impl Row {
@@ -240,6 +247,8 @@ fn run_with(
                     _ => None,
                 },
                 spl: None,
+                sensor_faults: res.sensor_faults,
+                faults: cfg.faults.iter().map(|f| f.to_string()).collect(),
             }
             .with_spl()
         })
@@ -268,6 +277,10 @@ pub struct Totals {
     pub unreachable_correct: usize,
     /// Timeouts.
     pub timeouts: usize,
+    /// Stops as arrived away from the goal (odometry astray).
+    pub astray: usize,
+    /// Runs in which the planner flagged a sensor fault.
+    pub flagged: usize,
     /// Mean path ratio over reached runs with a reference.
     pub mean_ratio: Option<f64>,
     /// Reached runs within 1.25× the reference.
@@ -314,6 +327,8 @@ pub fn totals(rows: &[Row]) -> Totals {
             .iter()
             .filter(|r| r.outcome == Outcome::Timeout)
             .count(),
+        astray: rows.iter().filter(|r| r.outcome == Outcome::Astray).count(),
+        flagged: rows.iter().filter(|r| r.sensor_faults > 0).count(),
         mean_ratio: (!ratios.is_empty()).then(|| ratios.iter().sum::<f64>() / ratios.len() as f64),
         within_125: ratios.iter().filter(|&&r| r <= 1.25).count(),
         wrongly_unreachable: rows.iter().filter(|r| r.wrongly_unreachable()).count(),
@@ -380,9 +395,17 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
         (0, 0) => String::new(),
         (ahead, beside) => format!(" ({ahead} with a mover ahead, {beside} beside or behind)"),
     };
+    // Only where faults showed, as for the movers.
+    let mut timeouts = t.timeouts.to_string();
+    if t.astray > 0 {
+        timeouts += &format!(" | astray {}", t.astray);
+    }
+    if t.flagged > 0 {
+        timeouts += &format!(" | sensor fault flagged in {}", t.flagged);
+    }
     let _ = writeln!(
         s,
-        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {}{movers} | unreachable {} ({} of {} unsolvable) | timeouts {} | mean path ratio {} | within 1.25x {}/{} | SPL {} | time ratio {}{split}",
+        "runs {} | reached {}/{} solvable ({:.1}%) | collisions {}{movers} | unreachable {} ({} of {} unsolvable) | timeouts {timeouts} | mean path ratio {} | within 1.25x {}/{} | SPL {} | time ratio {}{split}",
         t.runs,
         t.reached,
         t.solvable,
@@ -391,7 +414,6 @@ pub fn table(rows: &[Row], summary_only: bool) -> String {
         t.unreachable,
         t.unreachable_correct,
         t.runs - t.solvable,
-        t.timeouts,
         t.mean_ratio.map(|r| format!("{r:.3}")).unwrap_or_else(|| "–".into()),
         t.within_125,
         t.reached,
@@ -623,6 +645,8 @@ mod tests {
             contact: None,
             time_ratio: None,
             spl: None,
+            sensor_faults: 0,
+            faults: Vec::new(),
         }
         .with_spl()
     }

@@ -1,6 +1,7 @@
 //! `sim-host`: run the planner-core in simulated worlds.
 
 use clap::{Parser, Subcommand};
+use sim_host::fault::Fault;
 use sim_host::planners::PlannerKind;
 use sim_host::scenario::{collect, Scenario};
 use sim_host::sensor::SensorMode;
@@ -46,6 +47,12 @@ enum Cmd {
         /// planners: `liquid` and `liquid-online` refuse it).
         #[arg(long)]
         set_back: bool,
+        /// Inject a fault (repeatable): dead, stuck, stuck-clear, spikes,
+        /// dropouts, crosstalk, ambient, slip, stall, encoder-glitch,
+        /// overshoot, latency; parameters as `NAME:KEY=VALUE,…` (defaults
+        /// and keys in sim-host/README.md).
+        #[arg(long = "fault", value_name = "NAME[:KEY=VALUE,…]")]
+        faults: Vec<Fault>,
     },
     /// Every scenario under the given files or folders, in parallel.
     Bench {
@@ -85,6 +92,12 @@ enum Cmd {
         /// sensing planners).
         #[arg(long)]
         set_back: bool,
+        /// Inject a fault (repeatable): dead, stuck, stuck-clear, spikes,
+        /// dropouts, crosstalk, ambient, slip, stall, encoder-glitch,
+        /// overshoot, latency; parameters as `NAME:KEY=VALUE,…` (defaults
+        /// and keys in sim-host/README.md).
+        #[arg(long = "fault", value_name = "NAME[:KEY=VALUE,…]")]
+        faults: Vec<Fault>,
     },
     /// Two `bench --json` files of the same runs (two builds or settings),
     /// run by run: both totals over the runs in both, and which outcomes
@@ -139,16 +152,8 @@ enum Cmd {
         /// The page to write; the pictures go into `results/` beside it.
         #[arg(long, default_value = "docs/results.md")]
         out: PathBuf,
-        /// The folder that holds the shared sets (`barn`, `barn-tight`,
-        /// `examples`).
-        #[arg(long, default_value = "../shared/scenarios")]
-        shared: PathBuf,
-        /// The scenario library.
-        #[arg(long, default_value = "sim-host/scenarios")]
-        library: PathBuf,
-        /// Generated worlds of each kind.
-        #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
-        count: u64,
+        #[command(flatten)]
+        worlds: Worlds,
         /// First seed.
         #[arg(long, default_value_t = 1)]
         seed: u64,
@@ -162,6 +167,61 @@ enum Cmd {
         #[arg(long)]
         jobs: Option<usize>,
     },
+    /// Write the faults page: one planner on every still-world set under
+    /// no fault and each fault of `--fault` with its defaults, a table of
+    /// fault × set.
+    Faults {
+        /// The page to write.
+        #[arg(long, default_value = "docs/faults.md")]
+        out: PathBuf,
+        #[command(flatten)]
+        worlds: Worlds,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100))]
+        seeds: u64,
+        /// Planner.
+        #[arg(long, value_enum, default_value = "eapf")]
+        planner: PlannerKind,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
+}
+
+/// What writes a page: this command line and the commit.
+fn provenance() -> results::Provenance {
+    results::Provenance {
+        command: std::iter::once("sim-host".to_string())
+            .chain(std::env::args().skip(1))
+            .collect::<Vec<_>>()
+            .join(" "),
+        commit: commit(),
+    }
+}
+
+/// The sets of worlds the results and faults pages run over.
+#[derive(clap::Args)]
+struct Worlds {
+    /// The folder that holds the shared sets (`barn`, `barn-tight`,
+    /// `examples`).
+    #[arg(long, default_value = "../shared/scenarios")]
+    shared: PathBuf,
+    /// The scenario library.
+    #[arg(long, default_value = "sim-host/scenarios")]
+    library: PathBuf,
+    /// Generated worlds of each kind.
+    #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
+    count: u64,
+}
+
+impl Worlds {
+    /// The sets.
+    fn sets(&self) -> Result<Vec<results::Set>, String> {
+        results::sets(&self.shared, &self.library, self.count)
+    }
 }
 
 fn main() -> ExitCode {
@@ -214,6 +274,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             trace,
             perfect,
             set_back,
+            faults,
         } => {
             set_back_applies(set_back, &[planner])?;
             for out in svg_out.iter().chain(&trace) {
@@ -225,6 +286,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 seed,
                 sensors: sensors(perfect),
                 set_back,
+                faults: faults.clone(),
                 ..SimConfig::default()
             };
             let refp = reference::shortest_path(&sc);
@@ -236,6 +298,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
             );
             if set_back {
                 report += "sensors      set back from the rim by their minimum range\n";
+            }
+            for f in &faults {
+                report += &format!("fault        {f}\n");
             }
             report += &format!(
                 "outcome      {}\nsteps        {}\npath_length  {:.3} m\n",
@@ -302,6 +367,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             summary,
             perfect,
             set_back,
+            faults,
         } => {
             workers(jobs)?;
             let files = collect(&paths)?;
@@ -337,6 +403,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                         seed,
                         sensors: sensors(perfect),
                         set_back,
+                        faults: faults.clone(),
                         ..SimConfig::default()
                     };
                     let mut these = match &pictures {
@@ -383,9 +450,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
         }
         Cmd::Results {
             out,
-            shared,
-            library,
-            count,
+            worlds,
             seed,
             seeds,
             planner,
@@ -397,20 +462,14 @@ fn real_main(cli: Cli) -> Result<(), String> {
             } else {
                 planner
             };
-            let sets = results::sets(&shared, &library, count)?;
+            let sets = worlds.sets()?;
             // A bad output path is an error before anything runs.
             let pictures = out.with_file_name("results");
             std::fs::create_dir_all(&pictures)
                 .map_err(|e| format!("{}: {e}", pictures.display()))?;
             let started = std::time::Instant::now();
             let rows = results::run(&sets, &planners, seed, seeds, true);
-            let made = results::Provenance {
-                command: std::iter::once("sim-host".to_string())
-                    .chain(std::env::args().skip(1))
-                    .collect::<Vec<_>>()
-                    .join(" "),
-                commit: commit(),
-            };
+            let made = provenance();
             let (page, svgs) =
                 results::page(&sets, &rows, &planners, seed, seeds, "results", &made);
             for (file, svg) in svgs {
@@ -418,6 +477,31 @@ fn real_main(cli: Cli) -> Result<(), String> {
             }
             write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
+            say(&format!(
+                "wrote {} ({runs} runs in {:.0} s)\n",
+                out.display(),
+                started.elapsed().as_secs_f64()
+            ))
+        }
+        Cmd::Faults {
+            out,
+            worlds,
+            seed,
+            seeds,
+            planner,
+            jobs,
+        } => {
+            workers(jobs)?;
+            let sets = worlds.sets()?;
+            output_ok(&out, &[])?;
+            let started = std::time::Instant::now();
+            let rows = results::run_faults(&sets, planner, seed, seeds, true);
+            let made = provenance();
+            write(
+                &out,
+                &results::fault_page(&sets, &rows, planner, seed, seeds, &made),
+            )?;
+            let runs: usize = rows.iter().flat_map(|(_, r)| r).map(Vec::len).sum();
             say(&format!(
                 "wrote {} ({runs} runs in {:.0} s)\n",
                 out.display(),

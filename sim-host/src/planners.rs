@@ -201,6 +201,11 @@ impl SimPlanner {
         self.config().sensor_angles().map(to_rad)
     }
 
+    /// How near the goal counts as there, m.
+    pub fn goal_tolerance_m(&self) -> f64 {
+        self.config().goal_tolerance_mm() as f64 / 1000.0
+    }
+
     /// Sensor face offset from the centre, m.
     pub fn sensor_offset_m(&self) -> f64 {
         self.config().sensor_offset_mm() as f64 / 1000.0

@@ -4,6 +4,7 @@
 //! by `sim-host results` (`cargo xtask results`), never by hand.
 
 use crate::bench::{self, Row};
+use crate::fault::{self, Fault};
 use crate::generate::{self, Kind};
 use crate::planners::PlannerKind;
 use crate::reference;
@@ -124,17 +125,7 @@ pub fn run(
 ) -> Vec<Vec<Row>> {
     let runs: usize =
         sets.iter().map(|s| s.worlds.len()).sum::<usize>() * planners.len() * seeds as usize;
-    let bar = if progress {
-        ProgressBar::new(runs as u64)
-    } else {
-        ProgressBar::hidden()
-    };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar()),
-    );
+    let bar = progress_bar(runs, progress);
     let out = sets
         .iter()
         .map(|set| {
@@ -178,6 +169,22 @@ pub fn run(
         .collect();
     bar.finish_and_clear();
     out
+}
+
+/// One progress bar over `runs` runs (hidden without `progress`).
+fn progress_bar(runs: usize, progress: bool) -> ProgressBar {
+    let bar = if progress {
+        ProgressBar::new(runs as u64)
+    } else {
+        ProgressBar::hidden()
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{bar:40} {pos}/{len} runs {elapsed_precise} (eta {eta}) {msg}",
+        )
+        .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    bar
 }
 
 /// The planners of `rows` ranked by SPL (best first), each with its totals.
@@ -367,6 +374,100 @@ pub fn page(
     (s, svgs)
 }
 
+/// The faults page's rows: for no fault and then each named fault (with
+/// its defaults), `planner` on every still set, seeds `seed .. seed +
+/// seeds`; per fault, each set's rows.
+pub fn run_faults(
+    sets: &[Set],
+    planner: PlannerKind,
+    seed: u64,
+    seeds: u64,
+    progress: bool,
+) -> Vec<(String, Vec<Vec<Row>>)> {
+    let still: Vec<&Set> = sets.iter().filter(|s| !s.moving).collect();
+    let faults: Vec<Option<Fault>> = std::iter::once(None)
+        .chain(fault::NAMES.iter().map(|n| Fault::named(n)))
+        .collect();
+    let runs = still.iter().map(|s| s.worlds.len()).sum::<usize>() * faults.len() * seeds as usize;
+    let bar = progress_bar(runs, progress);
+    let out = faults
+        .iter()
+        .map(|fault| {
+            let name = fault.map_or("none", |f| f.name()).to_string();
+            bar.set_message(name.clone());
+            let rows = still
+                .iter()
+                .map(|set| {
+                    (seed..seed + seeds)
+                        .flat_map(|s| {
+                            let cfg = SimConfig {
+                                planner,
+                                seed: s,
+                                faults: fault.iter().copied().collect(),
+                                ..SimConfig::default()
+                            };
+                            bench::run_scenarios(&set.worlds, &cfg, &bar)
+                        })
+                        .collect()
+                })
+                .collect();
+            (name, rows)
+        })
+        .collect();
+    bar.finish_and_clear();
+    out
+}
+
+/// The faults page: one row per fault, one column per still set; each cell
+/// reached of reachable, collisions, runs with a sensor fault flagged and
+/// runs astray.
+pub fn fault_page(
+    sets: &[Set],
+    rows: &[(String, Vec<Vec<Row>>)],
+    planner: PlannerKind,
+    seed: u64,
+    seeds: u64,
+    made: &Provenance,
+) -> String {
+    let still: Vec<&Set> = sets.iter().filter(|s| !s.moving).collect();
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Faults\n\nWritten by `{}` at commit {}; nothing here is typed by hand. `{}` with one \
+         fault at a time, its parameters the defaults of `sim-host/README.md` (\"Faults\"), seeds \
+         {}–{}. Each cell: reached of the reachable runs · collisions · runs in which the planner \
+         flagged a sensor fault · runs astray (stopped as arrived away from the goal: odometry \
+         cannot know).\n",
+        made.command,
+        made.commit,
+        planner.name(),
+        seed,
+        seed + seeds - 1
+    );
+    let _ = write!(s, "| fault |");
+    for set in &still {
+        let _ = write!(s, " {} |", set.name);
+    }
+    let _ = write!(s, "\n|---|");
+    for _ in &still {
+        let _ = write!(s, "---|");
+    }
+    s.push('\n');
+    for (name, per_set) in rows {
+        let _ = write!(s, "| `{name}` |");
+        for set_rows in per_set {
+            let t = bench::totals(set_rows);
+            let _ = write!(
+                s,
+                " {}/{} · {} · {} · {} |",
+                t.reached, t.solvable, t.collisions, t.flagged, t.astray
+            );
+        }
+        s.push('\n');
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -423,5 +524,46 @@ mod tests {
             page.contains("![u-trap, every planner](results/two-traps.svg)")
                 || page.contains("![walled-in, every planner](results/two-traps.svg)")
         );
+    }
+
+    /// The faults page: a row for no fault and one per named fault, a
+    /// column per still set; a dead sensor is flagged and stands.
+    #[test]
+    fn the_faults_page_has_a_row_per_fault_and_a_column_per_set() {
+        let lib = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        let load = |f: &str| {
+            let p = lib.join(f);
+            (p.clone(), Scenario::load(&p).unwrap())
+        };
+        let set = |name: &str, f: &str, moving: bool| Set {
+            name: name.into(),
+            source: "the library".into(),
+            moving,
+            worlds: vec![load(f)],
+        };
+        let sets = [
+            set("corridor", "traps/corridor.toml", false),
+            set("u-trap", "traps/u-trap.toml", false),
+            set("movers", "traps/corridor.toml", true),
+        ];
+        let rows = run_faults(&sets, PlannerKind::Eapf, 1, 1, false);
+        assert_eq!(rows.len(), 1 + fault::NAMES.len());
+        let made = Provenance {
+            command: "sim-host faults".into(),
+            commit: "`abc`".into(),
+        };
+        let page = fault_page(&sets, &rows, PlannerKind::Eapf, 1, 1, &made);
+        assert!(page.contains("| fault | corridor | u-trap |\n"), "{page}");
+        assert!(
+            page.contains("| `none` | 1/1 · 0 · 0 · 0 | 1/1 · 0 · 0 · 0 |"),
+            "{page}"
+        );
+        assert!(
+            page.contains("| `dead` | 0/1 · 0 · 1 · 0 | 0/1 · 0 · 1 · 0 |"),
+            "{page}"
+        );
+        for name in fault::NAMES {
+            assert!(page.contains(&format!("| `{name}` |")), "{name}");
+        }
     }
 }

@@ -6,6 +6,7 @@
 //! against the moving circles, and feeds the planner odometry (exact, or
 //! with seeded slip).
 
+use crate::fault::{Fault, Faults};
 use crate::geom::V2;
 use crate::planners::{to_point, to_rad, to_v2, PlannerKind, SimPlanner};
 use crate::scenario::Scenario;
@@ -29,6 +30,9 @@ pub enum Outcome {
     Unreachable,
     /// The budget ran out.
     Timeout,
+    /// The planner stopped as arrived, but the true pose is not within
+    /// its goal tolerance: odometry went astray (a fault).
+    Astray,
 }
 
 impl Outcome {
@@ -39,6 +43,7 @@ impl Outcome {
             Outcome::Collision => "collision",
             Outcome::Unreachable => "unreachable",
             Outcome::Timeout => "timeout",
+            Outcome::Astray => "astray",
         }
     }
 }
@@ -137,6 +142,13 @@ impl Touched {
     }
 }
 
+/// A planner that stops as arrived is there if its true pose is within its
+/// goal tolerance plus this, m (the core's positions are whole mm).
+const ARRIVAL_SLACK_M: f64 = 0.01;
+
+/// How long the executor waits on stalled wheels before it ends the step, s.
+const STALL_S: f64 = 0.1;
+
 /// Simulation settings.
 #[derive(Clone, Debug)]
 pub struct SimConfig {
@@ -158,6 +170,8 @@ pub struct SimConfig {
     pub turn_rate: f64,
     /// Odometry slip: (distance σ as a fraction, heading σ per radian turned).
     pub slip: Option<(f64, f64)>,
+    /// Faults injected (`--fault`).
+    pub faults: Vec<Fault>,
     /// Budget: planner cycles.
     pub max_steps: usize,
     /// Budget: driven length as a multiple of the reference plus 5 m
@@ -177,6 +191,7 @@ impl Default for SimConfig {
             speed: 0.25,
             turn_rate: 2.0,
             slip: None,
+            faults: Vec::new(),
             max_steps: 3_000,
             max_length_ratio: 8.0,
         }
@@ -391,6 +406,8 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     };
     let mut seen: Vec<V2> = Vec::new();
     let mut faults = 0;
+    let mut injected = Faults::new(&cfg.faults, cfg.adc, cfg.seed);
+    let slip = cfg.slip.or(injected.slip());
     let mut outcome = Outcome::Timeout;
     let mut steps = 0;
     let debug = std::env::var_os("SIM_DEBUG").is_some();
@@ -402,8 +419,8 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
 
     'run: while steps < cfg.max_steps {
         steps += 1;
-        let raw = sensors.read(&world, p, heading, t);
-        let out = planner.step(op, oh, &raw);
+        let raw = injected.sensors(sensors.read(&world, p, heading, t), t);
+        let out = planner.step(op, oh, &injected.planner_counts(raw));
         if debug {
             // The beams' true ranges (mm; "-" beyond reach) beside the counts.
             let true_mm = (0..planner_core::SENSOR_COUNT).map(|i| {
@@ -426,8 +443,14 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             }
         }
         match out.status {
+            // Reached is the true pose's verdict, not odometry's (1 cm
+            // for the core's whole millimetres).
             Status::Arrived => {
-                outcome = Outcome::Reached;
+                outcome = if p.dist(goal) <= planner.goal_tolerance_m() + ARRIVAL_SLACK_M {
+                    Outcome::Reached
+                } else {
+                    Outcome::Astray
+                };
                 break;
             }
             Status::Unreachable => {
@@ -454,8 +477,8 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             break;
         }
         t = turned;
-        let mut true_turn = dturn;
-        if let Some((_, hs)) = cfg.slip {
+        let mut true_turn = injected.turn(dturn);
+        if let Some((_, hs)) = slip {
             true_turn += unit.sample(&mut rng) * hs * dturn.abs();
         }
         heading = wrap(heading + true_turn);
@@ -482,13 +505,23 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         let step = out.step_m;
         let mut done = 0.0;
         while done < step - 1e-9 {
-            let raw = sensors.read(&world, p, heading, t);
+            let raw = injected.sensors(sensors.read(&world, p, heading, t), t);
             if !planner.guard(&raw, step - done) {
+                break;
+            }
+            // Stalled wheels: the encoders see no progress and the
+            // executor ends the step.
+            if injected.stalled(t) {
+                if track.stand(&world, p, heading, (t, t + STALL_S), r) <= r {
+                    outcome = Outcome::Collision;
+                    break 'run;
+                }
+                t += STALL_S;
                 break;
             }
             let piece = (step - done).min(0.01);
             let mut true_piece = piece;
-            if let Some((ds, _)) = cfg.slip {
+            if let Some((ds, _)) = slip {
                 true_piece *= 1.0 + unit.sample(&mut rng) * ds;
             }
             let q = p + V2::from_angle(heading) * true_piece;
@@ -496,7 +529,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
             let c = track.piece(&world, p, q, (t, t1), heading, r);
             p = q;
             t = t1;
-            op = op + V2::from_angle(oh) * piece;
+            op = op + V2::from_angle(oh) * injected.odometry(piece);
             done += piece;
             if c <= r {
                 outcome = Outcome::Collision;

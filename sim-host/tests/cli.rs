@@ -531,3 +531,48 @@ fn outputs_never_overwrite_inputs() {
     assert!(e.contains("runs.jsonl"), "{e}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `bench --fault NAME` runs for every fault name and records it in each
+/// run's JSON; a dead sensor is flagged by the planner on every run (the
+/// rover stands), a bad fault is refused before anything runs.
+#[test]
+fn bench_takes_every_fault_and_records_it() {
+    let (dir, json) = scratch("faults");
+    for name in sim_host::fault::NAMES {
+        let text = sim_host(
+            &["bench", "--summary", "--fault", name, "--json"],
+            &[&json, &corridor()],
+        );
+        assert!(text.starts_with("runs 1 |"), "{name}: {text}");
+        let faults = json_field(&json, "faults");
+        let recorded = faults[0][0].as_str().unwrap();
+        assert!(recorded.starts_with(name), "{name}: {recorded}");
+        if name == "dead" {
+            assert!(text.contains("sensor fault flagged in 1"), "{text}");
+            assert_eq!(json_field(&json, "outcome"), ["timeout"]);
+        }
+    }
+    // Two at once, with parameters.
+    let text = sim_host(
+        &[
+            "run",
+            "--fault",
+            "spikes:rate=0.1",
+            "--fault",
+            "overshoot:fraction=0.2",
+        ],
+        &[&corridor()],
+    );
+    assert!(text.contains("fault        spikes:rate=0.1"), "{text}");
+    assert!(
+        text.contains("fault        overshoot:fraction=0.2"),
+        "{text}"
+    );
+    let err = sim_host_ends(
+        false,
+        &["bench", "--fault", "dead:sensor=9"],
+        &[&corridor()],
+    );
+    assert!(err.contains("sensor=9 is not 0..=4"), "{err}");
+    std::fs::remove_dir_all(&dir).ok();
+}

@@ -286,15 +286,17 @@ fn main() {
         "avr-size" => report("avr-size"),
         "stm32-profile" => report("stm32-profile"),
         "results" => results(),
+        "faults" => cargo_run(&["-p", "sim-host", "--", "faults"]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <ci|cross|results|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
+                "usage: cargo xtask <ci|cross|results|faults|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
             );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
             );
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
             eprintln!("  results       write docs/results.md: every planner on every set (sim-host results)");
+            eprintln!("  faults        write docs/faults.md: eapf under each fault on every still set (sim-host faults)");
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
