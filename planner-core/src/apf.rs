@@ -1,11 +1,11 @@
-//! The classical artificial potential field (Khatib 1986, ALGORITHMS.md
-//! §1), on the same five IR sensors, as the baseline the EAPF is compared
+//! The classical artificial potential field (Khatib 1986,
+//! docs/algorithms.md §1), on the same five IR sensors, as the baseline the EAPF is compared
 //! with. It is meant to show the classical failures (local minima, goals
 //! near obstacles, oscillation in narrow passages), so it has no memory and
 //! no escape; it shares only the rover's safety rule (§5), so that it stops
 //! rather than collides.
 //!
-//! Forces (the 1986 form, named as ALGORITHMS.md asks):
+//! Forces (the 1986 form, named as docs/algorithms.md §1 gives it):
 //! - attractive `F_att = ξ (q_goal − q)`, ξ per metre (linear, not capped);
 //! - repulsive, for each obstacle a sensor sees within the influence
 //!   distance ρ: `F_rep = η (1/d − 1/ρ) (1/d²) · unit(q − o)`, d in metres.

@@ -1,5 +1,5 @@
 //! What the planner tells the executor each cycle, and the safety rule that
-//! bounds it (ALGORITHMS.md §5): a commanded translation never enters space
+//! bounds it (docs/algorithms.md §5): a commanded translation never enters space
 //! that the current readings do not show free, allowing for the robot radius
 //! and a clearance margin; during the advance the executor calls the guard
 //! with fresh readings and stops short if something appears. Ours: the

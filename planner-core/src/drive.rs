@@ -3,7 +3,7 @@
 //!
 //! Both firmwares share this code, so the only thing a board supplies is
 //! pins: encoder tick counts in, wheel duties out. Nothing here is from the
-//! papers; it is the executor that ALGORITHMS.md §5 assumes (turn in place,
+//! papers; it is the executor that docs/algorithms.md §5 assumes (turn in place,
 //! advance straight, ask the guard on the way).
 //!
 //! Formats (see [`crate::fixed`] for the rest): position in 1/4,096 mm (`i32`,

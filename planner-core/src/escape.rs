@@ -1,8 +1,8 @@
 //! Escape from local minima with virtual obstacles: the "liquid movement"
-//! idea of Moaveni & Ghanbari Gol (ALGORITHMS.md §3) applied online.
+//! idea of Moaveni & Ghanbari Gol (docs/algorithms.md §3) applied online.
 //!
 //! A droplet caught in a pit raises the level there so the next one flows
-//! past. Online, the rover is "in a pit" (ALGORITHMS.md §3) when either
+//! past. Online, the rover is "in a pit" (docs/algorithms.md §3) when either
 //!
 //! * it is **stuck**: over the last `window_steps` planner cycles its net
 //!   displacement stayed below `stuck_mm` (it dithers or oscillates), or

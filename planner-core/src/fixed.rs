@@ -32,7 +32,7 @@ pub const TRIG_ONE: i32 = 1 << TRIG_SHIFT;
 ///
 /// Wrapping `u16` arithmetic is exactly circular arithmetic, so headings never
 /// need normalising and cannot leave their range. Counter-clockwise positive,
-/// zero along +x (ALGORITHMS.md conventions).
+/// zero along +x (docs/algorithms.md, the frames).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Angle(pub u16);

@@ -1,4 +1,4 @@
-//! The EAPF forces (Mohamed & Abbas 2013, §5; ALGORITHMS.md §2), each a
+//! The EAPF forces (Mohamed & Abbas 2013, §5; docs/algorithms.md §2), each a
 //! [`Force`] pointing the way the paper describes (eq. 16's printed signs are
 //! inconsistent; the directions are the design).
 

@@ -1,5 +1,5 @@
 //! The "liquid movement" planner over a known map (Moaveni & Ghanbari Gol,
-//! ALGORITHMS.md §3): descend a potential over `A_nsd` discrete headings;
+//! docs/algorithms.md §3): descend a potential over `A_nsd` discrete headings;
 //! wherever no neighbour is lower (a local minimum) drop a virtual obstacle,
 //! which raises the potential there like liquid filling a pit; then either
 //! restart from the start (the paper's offline algorithm) or go on from

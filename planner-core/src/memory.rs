@@ -3,7 +3,7 @@
 //!
 //! Each collision point is classified when it is detected from the robot's
 //! direction θr: moving mainly along x (`|cos θr| > |sin θr|`, the paper's
-//! eq. 11 read as magnitudes, see ALGORITHMS.md §2) makes it an X-point if
+//! eq. 11 read as magnitudes, see docs/algorithms.md §2) makes it an X-point if
 //! its x lies between the robot's and the target's x; mainly along y makes it
 //! a Y-point likewise; within the diagonal tolerance of 45° makes it an
 //! XY-point if both hold. A point outside its range is not remembered (the

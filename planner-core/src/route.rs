@@ -1,4 +1,4 @@
-//! The route layer for a known map (ALGORITHMS.md §4, after Al-Ansarry,
+//! The route layer for a known map (docs/algorithms.md §4, after Al-Ansarry,
 //! Al-Darraji & Honi 2023): Dijkstra finds candidate routes on a waypoint
 //! graph, the potential field scores each candidate's safety and the safest
 //! is taken; the online EAPF planner then drives from waypoint to waypoint

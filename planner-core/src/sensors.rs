@@ -1,6 +1,6 @@
 //! The five infrared range sensors: raw ADC counts in, trusted distances out.
 //!
-//! Sharp GP2Y0A21YK0F-class sensors (ALGORITHMS.md §5) give a voltage that
+//! Sharp GP2Y0A21YK0F-class sensors (docs/algorithms.md §5) give a voltage that
 //! falls roughly as 1/distance between 10 and 80 cm, fold back below 10 cm
 //! (a very near object reads as farther), and give a low phantom voltage
 //! when nothing is in range. The core therefore converts each raw count with
@@ -114,7 +114,7 @@ pub enum CalibrationError {
 }
 
 /// The least output a working sensor gives, mV. A Sharp IR sensor puts out
-/// its phantom level (0.25–0.4 V) with nothing in range (ALGORITHMS.md §5),
+/// its phantom level (0.25–0.4 V) with nothing in range (docs/algorithms.md §5),
 /// so a count below 0.1 V is no distance: a broken signal wire (the pin
 /// pulled to ground), an unpowered sensor or a shorted output. Read as
 /// "clear" it would open the way; it is flagged implausible instead, and
@@ -174,7 +174,7 @@ impl Calibration {
 
     /// [`Calibration::from_points`], interpolated linearly in 1/d between
     /// the points instead of in d: the sensor's output is close to linear
-    /// in 1/d (ALGORITHMS.md §5: "falls roughly as 1/distance"), and on the
+    /// in 1/d (docs/algorithms.md §5: about 1/distance), and on the
     /// datasheet curve the straight line in d reads 17 mm too far at
     /// 140 mm, between its 100 and 200 mm points. Beyond the end points the
     /// end segments' straight lines, as there (1/d would bend to infinity
@@ -289,7 +289,7 @@ impl Calibration {
         })
     }
 
-    /// The GP2Y0A21YK0F datasheet curve for an ADC (ALGORITHMS.md §5).
+    /// The GP2Y0A21YK0F datasheet curve for an ADC (docs/algorithms.md §5).
     pub const fn gp2y0a21(adc: AdcProfile) -> Result<Self, CalibrationError> {
         Calibration::gp2y0a21_with(adc, false)
     }

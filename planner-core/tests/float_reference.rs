@@ -1,5 +1,5 @@
 //! A float (f64) reference of the same planner (`planner-float`, written
-//! independently from the equations: ALGORITHMS.md §2 and the choices
+//! independently from the equations: docs/algorithms.md §2 and the choices
 //! documented in the crate), to bound the error of the fixed-point
 //! arithmetic on random inputs.
 //!

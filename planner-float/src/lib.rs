@@ -1,7 +1,7 @@
 //! # planner-float
 //!
 //! The EAPF planner step of `planner-core`, written again from the equations
-//! (ALGORITHMS.md §2 and the choices documented in planner-core) in floating
+//! (docs/algorithms.md §2 and the choices documented in planner-core) in floating
 //! point, generic over `f32` and `f64`. Two uses:
 //!
 //! - `f64`: the reference that bounds planner-core's fixed-point error

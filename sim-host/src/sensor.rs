@@ -1,8 +1,8 @@
 //! Virtual Sharp GP2Y0A21YK0F-like IR sensors: true distance → output
 //! voltage → ADC counts, as the core sees them on the real rover.
 //!
-//! The voltage curve interpolates the datasheet points of ALGORITHMS.md §5
-//! linearly in 1/distance (the sensor's output is close to linear in
+//! The voltage curve interpolates the datasheet points (`GP2Y0A21_MV_MM`,
+//! docs/algorithms.md §5) linearly in 1/distance (the sensor's output is close to linear in
 //! 1/distance), folds back below 10 cm (peak 3.1 V near 6.5 cm, then falling,
 //! so a very near object reads as farther), continues the 70–80 cm slope
 //! beyond 80 cm and floors at a 0.28 V phantom level when nothing is in range.

@@ -1,4 +1,4 @@
-//! The liquid-movement paper's four cases (ALGORITHMS.md §3), on worlds of
+//! The liquid-movement paper's four cases (docs/algorithms.md §3), on worlds of
 //! our own from the scenario library: with no local minimum both the
 //! classical APF and the liquid planners reach the goal; with two obstacles
 //! making a local minimum, an obstacle near the goal, and a narrow passage

@@ -76,7 +76,7 @@ const NEAR_CELLS: usize = 2;
 pub const LOOKS: u8 = 9;
 /// A look before a turn goes past the way by the sector's half width less
 /// this.
-const LOOK_SLACK: Angle = Angle::from_deg(5);
+pub const LOOK_SLACK: Angle = Angle::from_deg(5);
 /// Not reached by the wave.
 const FAR: u16 = u16::MAX;
 
@@ -141,10 +141,11 @@ impl<const N: usize> Grid<N> {
             .is_some_and(|(x, y)| self.evidence[y][x] >= BLOCKED)
     }
 
-    /// The next point to drive to from `robot` (see [`Grid::way`]),
-    /// the wave worked out again first if a cell changed; with no way,
-    /// the evidence weakened and `Err(true)` up to [`FORGETS`] times
-    /// (plan again next cycle), then `Err(false)`: unreachable.
+    /// The next point to drive to from `robot`: the farthest cell down the
+    /// wave that a straight line reaches (the wave worked out again first
+    /// if a cell changed). With no way, `Err(true)`: look round; every
+    /// [`LOOKS`] such cycles the evidence is weakened, and after
+    /// [`FORGETS`] weakenings `Err(false)`: unreachable.
     pub fn next(&mut self, robot: Point) -> Result<Point, bool> {
         if self.changed {
             self.plan(false);
