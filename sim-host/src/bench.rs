@@ -626,10 +626,16 @@ pub fn compare(before: &[Row], after: &[Row], list_runs: bool) -> Result<String,
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
 
-    fn row(planner: &str, file: &str, seed: u64, outcome: Outcome, path_length: f64) -> Row {
+    pub(crate) fn row(
+        planner: &str,
+        file: &str,
+        seed: u64,
+        outcome: Outcome,
+        path_length: f64,
+    ) -> Row {
         Row {
             name: file.into(),
             planner: planner.into(),

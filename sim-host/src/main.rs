@@ -167,6 +167,27 @@ enum Cmd {
         #[arg(long)]
         jobs: Option<usize>,
     },
+    /// Write the known-failures page: one planner on every set, each world
+    /// it fails on some seed with the commands that replay it.
+    Failures {
+        /// The page to write.
+        #[arg(long, default_value = "docs/failures.md")]
+        out: PathBuf,
+        #[command(flatten)]
+        worlds: Worlds,
+        /// First seed.
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// Seeds.
+        #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
+        seeds: u64,
+        /// Planner.
+        #[arg(long, value_enum, default_value = "eapf")]
+        planner: PlannerKind,
+        /// Worker threads (default: one per core).
+        #[arg(long)]
+        jobs: Option<usize>,
+    },
     /// Write the faults page: one planner on every still-world set under
     /// no fault and each fault of `--fault` with its defaults, a table of
     /// fault × set.
@@ -475,6 +496,28 @@ fn real_main(cli: Cli) -> Result<(), String> {
             for (file, svg) in svgs {
                 write(&pictures.join(file), &svg)?;
             }
+            write(&out, &page)?;
+            let runs: usize = rows.iter().map(Vec::len).sum();
+            say(&format!(
+                "wrote {} ({runs} runs in {:.0} s)\n",
+                out.display(),
+                started.elapsed().as_secs_f64()
+            ))
+        }
+        Cmd::Failures {
+            out,
+            worlds,
+            seed,
+            seeds,
+            planner,
+            jobs,
+        } => {
+            workers(jobs)?;
+            let sets = worlds.sets()?;
+            output_ok(&out, &[])?;
+            let started = std::time::Instant::now();
+            let rows = results::run(&sets, &[planner], seed, seeds, true);
+            let page = results::failures_page(&sets, &rows, planner, seed, seeds, &provenance());
             write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
             say(&format!(

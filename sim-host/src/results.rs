@@ -43,6 +43,10 @@ pub struct Set {
     pub moving: bool,
     /// The worlds: a path (for the rows) and the scenario.
     pub worlds: Vec<(PathBuf, Scenario)>,
+    /// For a generated set, the `gen` options of its kind (`" --kind
+    /// boxes"`, empty for circles): its worlds are made again by
+    /// `gen FILE --seed N` with them.
+    pub generated: Option<String>,
 }
 
 /// The generated sets: kind, first seed.
@@ -83,6 +87,7 @@ pub fn sets(shared: &Path, library: &Path, count: u64) -> Result<Vec<Set>, Strin
             source: format!("`{}`", dir.display()),
             moving: false,
             worlds,
+            generated: None,
         });
     }
     let (start, goal) = ([6.0, 7.3], [12.7, 9.75]);
@@ -109,6 +114,7 @@ pub fn sets(shared: &Path, library: &Path, count: u64) -> Result<Vec<Set>, Strin
             source: format!("`sim-host gen DIR --count {count} --seed {first}{kind_arg}`"),
             moving: kind == Kind::Moving,
             worlds,
+            generated: Some(kind_arg.to_string()),
         });
     }
     Ok(sets)
@@ -468,9 +474,71 @@ pub fn fault_page(
     s
 }
 
+/// The known-failures page: for `planner` on every set, each world it
+/// fails on some seed (a reachable goal not reached, a walled-in goal not
+/// reported, or a collision), with the outcome on each such seed and the
+/// commands that replay the first.
+pub fn failures_page(
+    sets: &[Set],
+    rows: &[Vec<Row>],
+    planner: PlannerKind,
+    seed: u64,
+    seeds: u64,
+    made: &Provenance,
+) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "# Known failures\n\nWritten by `{}` at commit {}; nothing here is typed by hand. `{}` on \
+         every set, seeds {}–{}. A run fails when a reachable goal is not reached, a walled-in \
+         goal is not reported, or the rover collides. One line a world: the outcome on each \
+         seed it fails, and the commands that replay the first (`sim-host` is `cargo run \
+         --release -p sim-host --`, run at the top of the repository; `--svg out.svg` draws it).",
+        made.command,
+        made.commit,
+        planner.name(),
+        seed,
+        seed + seeds - 1
+    );
+    for (set, rows) in sets.iter().zip(rows) {
+        let failed: Vec<&Row> = rows.iter().filter(|r| !r.correct()).collect();
+        let _ = writeln!(
+            s,
+            "\n## {} ({} of {} runs)\n",
+            set.name,
+            failed.len(),
+            rows.len()
+        );
+        let mut files: Vec<&PathBuf> = failed.iter().map(|r| &r.file).collect();
+        files.dedup();
+        for file in files {
+            let theirs: Vec<&&Row> = failed.iter().filter(|r| &r.file == file).collect();
+            let outcomes: Vec<String> = theirs
+                .iter()
+                .map(|r| format!("seed {} {}", r.seed, r.outcome.as_str()))
+                .collect();
+            let first = theirs[0].seed;
+            let stem = file.file_stem().unwrap_or_default().to_string_lossy();
+            let replay = match &set.generated {
+                Some(kind) => {
+                    let world_seed = stem.rsplit('-').next().unwrap_or("1");
+                    let tmp = format!("/tmp/{stem}.toml");
+                    format!(
+                        "`sim-host gen {tmp} --seed {world_seed}{kind} --force && sim-host run {tmp} --seed {first}`"
+                    )
+                }
+                None => format!("`sim-host run {} --seed {first}`", file.display()),
+            };
+            let _ = writeln!(s, "- `{stem}`: {}. {replay}", outcomes.join(", "));
+        }
+    }
+    s
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::sim::Outcome;
 
     /// A page of two worlds and three planners: the tables rank by SPL,
     /// the product is set against the best peer, and each set gets a
@@ -490,6 +558,7 @@ mod tests {
             source: "the library".into(),
             moving: false,
             worlds,
+            generated: None,
         }];
         let planners = [PlannerKind::Eapf, PlannerKind::Apf, PlannerKind::Vfh];
         let rows = run(&sets, &planners, 1, 2, false);
@@ -540,6 +609,7 @@ mod tests {
             source: "the library".into(),
             moving,
             worlds: vec![load(f)],
+            generated: None,
         };
         let sets = [
             set("corridor", "traps/corridor.toml", false),
@@ -565,5 +635,62 @@ mod tests {
         for name in fault::NAMES {
             assert!(page.contains(&format!("| `{name}` |")), "{name}");
         }
+    }
+
+    /// The failures page lists each failed world once with its seeds and
+    /// a replay command; a generated world is made again first.
+    #[test]
+    fn the_failures_page_lists_each_failed_world_with_its_replay() {
+        let lib = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
+        let p = lib.join("traps/u-trap.toml");
+        let world = (p.clone(), Scenario::load(&p).unwrap());
+        let gen = PathBuf::from("gen/box-69.toml");
+        let sets = [
+            Set {
+                name: "traps".into(),
+                source: "the library".into(),
+                moving: false,
+                worlds: vec![world.clone()],
+                generated: None,
+            },
+            Set {
+                name: "box worlds".into(),
+                source: "gen".into(),
+                moving: false,
+                worlds: vec![(gen.clone(), world.1.clone())],
+                generated: Some(" --kind boxes".into()),
+            },
+        ];
+        let row = |file: &PathBuf, seed, outcome| {
+            let mut r = bench::tests::row("eapf", "w", seed, outcome, 5.0);
+            r.file = file.clone();
+            r
+        };
+        let rows = vec![
+            vec![row(&p, 1, Outcome::Reached), row(&p, 2, Outcome::Timeout)],
+            vec![
+                row(&gen, 4, Outcome::Collision),
+                row(&gen, 5, Outcome::Timeout),
+            ],
+        ];
+        let made = Provenance {
+            command: "sim-host failures".into(),
+            commit: "`abc`".into(),
+        };
+        let page = failures_page(&sets, &rows, PlannerKind::Eapf, 1, 5, &made);
+        assert!(page.contains("## traps (1 of 2 runs)"), "{page}");
+        let trap = format!(
+            "- `u-trap`: seed 2 timeout. `sim-host run {} --seed 2`",
+            p.display()
+        );
+        assert!(page.contains(&trap), "{page}");
+        assert!(page.contains("## box worlds (2 of 2 runs)"), "{page}");
+        assert!(
+            page.contains(
+                "- `box-69`: seed 4 collision, seed 5 timeout. `sim-host gen /tmp/box-69.toml \
+                 --seed 69 --kind boxes --force && sim-host run /tmp/box-69.toml --seed 4`"
+            ),
+            "{page}"
+        );
     }
 }

@@ -287,9 +287,10 @@ fn main() {
         "stm32-profile" => report("stm32-profile"),
         "results" => results(),
         "faults" => cargo_run(&["-p", "sim-host", "--", "faults"]),
+        "failures" => cargo_run(&["-p", "sim-host", "--", "failures"]),
         _ => {
             eprintln!(
-                "usage: cargo xtask <ci|cross|results|faults|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
+                "usage: cargo xtask <ci|cross|results|faults|failures|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
             );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
@@ -297,6 +298,7 @@ fn main() {
             eprintln!("  cross  planner-core for thumbv7em-none-eabihf and avr-none");
             eprintln!("  results       write docs/results.md: every planner on every set (sim-host results)");
             eprintln!("  faults        write docs/faults.md: eapf under each fault on every still set (sim-host faults)");
+            eprintln!("  failures      write docs/failures.md: each world eapf fails, with its replay (sim-host failures)");
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");
