@@ -493,7 +493,8 @@ pub fn failures_page(
          every set, seeds {}–{}. A run fails when a reachable goal is not reached, a walled-in \
          goal is not reported, or the rover collides. One line a world: the outcome on each \
          seed it fails, and the commands that replay the first (`sim-host` is `cargo run \
-         --release -p sim-host --`, run at the top of the repository; `--svg out.svg` draws it).",
+         --release -p sim-host --`, run at the top of the repository; `--svg out.svg` draws it); \
+         at most {FAILURES_LISTED} worlds a set, by file name.",
         made.command,
         made.commit,
         planner.name(),
@@ -510,8 +511,13 @@ pub fn failures_page(
             rows.len()
         );
         let mut files: Vec<&PathBuf> = failed.iter().map(|r| &r.file).collect();
+        files.sort();
         files.dedup();
-        for file in files {
+        if files.is_empty() {
+            s.push_str("None.\n");
+        }
+        let more = files.len().saturating_sub(FAILURES_LISTED);
+        for file in files.into_iter().take(FAILURES_LISTED) {
             let theirs: Vec<&&Row> = failed.iter().filter(|r| &r.file == file).collect();
             let outcomes: Vec<String> = theirs
                 .iter()
@@ -531,9 +537,16 @@ pub fn failures_page(
             };
             let _ = writeln!(s, "- `{stem}`: {}. {replay}", outcomes.join(", "));
         }
+        if more > 0 {
+            let _ = writeln!(s, "- and {more} more worlds.");
+        }
     }
     s
 }
+
+/// Worlds listed a set on the known-failures page (the page stays short;
+/// the count of failed runs is for all of them).
+pub const FAILURES_LISTED: usize = 12;
 
 #[cfg(test)]
 mod tests {
@@ -637,27 +650,29 @@ mod tests {
         }
     }
 
-    /// The failures page lists each failed world once with its seeds and
-    /// a replay command; a generated world is made again first.
+    /// The failures page lists each failed world once, by file name, with
+    /// its seeds and a replay command; a generated world is made again
+    /// first.
     #[test]
     fn the_failures_page_lists_each_failed_world_with_its_replay() {
         let lib = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios");
-        let p = lib.join("traps/u-trap.toml");
-        let world = (p.clone(), Scenario::load(&p).unwrap());
+        let u = lib.join("traps/u-trap.toml");
+        let walled = lib.join("traps/walled-in.toml");
+        let load = |p: &PathBuf| (p.clone(), Scenario::load(p).unwrap());
         let gen = PathBuf::from("gen/box-69.toml");
         let sets = [
             Set {
                 name: "traps".into(),
                 source: "the library".into(),
                 moving: false,
-                worlds: vec![world.clone()],
+                worlds: vec![load(&u), load(&walled)],
                 generated: None,
             },
             Set {
                 name: "box worlds".into(),
                 source: "gen".into(),
                 moving: false,
-                worlds: vec![(gen.clone(), world.1.clone())],
+                worlds: vec![(gen.clone(), load(&u).1)],
                 generated: Some(" --kind boxes".into()),
             },
         ];
@@ -666,8 +681,14 @@ mod tests {
             r.file = file.clone();
             r
         };
+        // Seed by seed, as a bench gives them.
         let rows = vec![
-            vec![row(&p, 1, Outcome::Reached), row(&p, 2, Outcome::Timeout)],
+            vec![
+                row(&u, 1, Outcome::Reached),
+                row(&walled, 2, Outcome::Timeout),
+                row(&u, 2, Outcome::Timeout),
+                row(&u, 3, Outcome::Timeout),
+            ],
             vec![
                 row(&gen, 4, Outcome::Collision),
                 row(&gen, 5, Outcome::Timeout),
@@ -678,10 +699,10 @@ mod tests {
             commit: "`abc`".into(),
         };
         let page = failures_page(&sets, &rows, PlannerKind::Eapf, 1, 5, &made);
-        assert!(page.contains("## traps (1 of 2 runs)"), "{page}");
         let trap = format!(
-            "- `u-trap`: seed 2 timeout. `sim-host run {} --seed 2`",
-            p.display()
+            "## traps (3 of 4 runs)\n\n- `u-trap`: seed 2 timeout, seed 3 timeout. `sim-host run {} \
+             --seed 2`\n- `walled-in`: seed 2 timeout.",
+            u.display()
         );
         assert!(page.contains(&trap), "{page}");
         assert!(page.contains("## box worlds (2 of 2 runs)"), "{page}");
