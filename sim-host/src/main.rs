@@ -154,18 +154,12 @@ enum Cmd {
         out: PathBuf,
         #[command(flatten)]
         worlds: Worlds,
-        /// First seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
         /// Seeds.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
         seeds: u64,
         /// Planners (default: all).
         #[arg(long, value_enum, value_delimiter = ',')]
         planner: Vec<PlannerKind>,
-        /// Worker threads (default: one per core).
-        #[arg(long)]
-        jobs: Option<usize>,
     },
     /// Write the known-failures page: one planner on every set, each world
     /// it fails on some seed with the commands that replay it.
@@ -175,18 +169,12 @@ enum Cmd {
         out: PathBuf,
         #[command(flatten)]
         worlds: Worlds,
-        /// First seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
         /// Seeds.
         #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u64).range(1..=100))]
         seeds: u64,
         /// Planner.
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
-        /// Worker threads (default: one per core).
-        #[arg(long)]
-        jobs: Option<usize>,
     },
     /// Write the faults page: one planner on every still-world set under
     /// no fault and each fault of `--fault` with its defaults, a table of
@@ -197,19 +185,22 @@ enum Cmd {
         out: PathBuf,
         #[command(flatten)]
         worlds: Worlds,
-        /// First seed.
-        #[arg(long, default_value_t = 1)]
-        seed: u64,
         /// Seeds.
         #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u64).range(1..=100))]
         seeds: u64,
         /// Planner.
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
-        /// Worker threads (default: one per core).
-        #[arg(long)]
-        jobs: Option<usize>,
     },
+}
+
+/// Say that the page `out` was written from `runs` runs since `started`.
+fn wrote(out: &Path, runs: usize, started: std::time::Instant) -> Result<(), String> {
+    say(&format!(
+        "wrote {} ({runs} runs in {:.0} s)\n",
+        out.display(),
+        started.elapsed().as_secs_f64()
+    ))
 }
 
 /// What writes a page: this command line and the commit.
@@ -223,7 +214,7 @@ fn provenance() -> results::Provenance {
     }
 }
 
-/// The sets of worlds the results and faults pages run over.
+/// The sets of worlds the pages run over, the first seed and the workers.
 #[derive(clap::Args)]
 struct Worlds {
     /// The folder that holds the shared sets (`barn`, `barn-tight`,
@@ -236,12 +227,27 @@ struct Worlds {
     /// Generated worlds of each kind.
     #[arg(long, default_value_t = 30, value_parser = clap::value_parser!(u64).range(1..=1000))]
     count: u64,
+    /// First seed.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Worker threads (default: one per core).
+    #[arg(long)]
+    jobs: Option<usize>,
 }
 
 impl Worlds {
     /// The sets.
     fn sets(&self) -> Result<Vec<results::Set>, String> {
         results::sets(&self.shared, &self.library, self.count)
+    }
+
+    /// Ready to write the page `out` with `jobs` workers: the sets, and
+    /// the time the runs start (a bad output is an error before they do).
+    fn ready(&self, out: &Path) -> Result<(Vec<results::Set>, std::time::Instant), String> {
+        workers(self.jobs)?;
+        let sets = self.sets()?;
+        output_ok(out, &[])?;
+        Ok((sets, std::time::Instant::now()))
     }
 }
 
@@ -472,12 +478,11 @@ fn real_main(cli: Cli) -> Result<(), String> {
         Cmd::Results {
             out,
             worlds,
-            seed,
             seeds,
             planner,
-            jobs,
         } => {
-            workers(jobs)?;
+            workers(worlds.jobs)?;
+            let seed = worlds.seed;
             let planners = if planner.is_empty() {
                 results::PLANNERS.to_vec()
             } else {
@@ -498,46 +503,30 @@ fn real_main(cli: Cli) -> Result<(), String> {
             }
             write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
-            say(&format!(
-                "wrote {} ({runs} runs in {:.0} s)\n",
-                out.display(),
-                started.elapsed().as_secs_f64()
-            ))
+            wrote(&out, runs, started)
         }
         Cmd::Failures {
             out,
             worlds,
-            seed,
             seeds,
             planner,
-            jobs,
         } => {
-            workers(jobs)?;
-            let sets = worlds.sets()?;
-            output_ok(&out, &[])?;
-            let started = std::time::Instant::now();
+            let (sets, started) = worlds.ready(&out)?;
+            let seed = worlds.seed;
             let rows = results::run(&sets, &[planner], seed, seeds, true);
             let page = results::failures_page(&sets, &rows, planner, seed, seeds, &provenance());
             write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
-            say(&format!(
-                "wrote {} ({runs} runs in {:.0} s)\n",
-                out.display(),
-                started.elapsed().as_secs_f64()
-            ))
+            wrote(&out, runs, started)
         }
         Cmd::Faults {
             out,
             worlds,
-            seed,
             seeds,
             planner,
-            jobs,
         } => {
-            workers(jobs)?;
-            let sets = worlds.sets()?;
-            output_ok(&out, &[])?;
-            let started = std::time::Instant::now();
+            let (sets, started) = worlds.ready(&out)?;
+            let seed = worlds.seed;
             let rows = results::run_faults(&sets, planner, seed, seeds, true);
             let made = provenance();
             write(
@@ -545,11 +534,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
                 &results::fault_page(&sets, &rows, planner, seed, seeds, &made),
             )?;
             let runs: usize = rows.iter().flat_map(|(_, r)| r).map(Vec::len).sum();
-            say(&format!(
-                "wrote {} ({runs} runs in {:.0} s)\n",
-                out.display(),
-                started.elapsed().as_secs_f64()
-            ))
+            wrote(&out, runs, started)
         }
         Cmd::Gen {
             out,
