@@ -37,7 +37,7 @@ pub struct Row {
     pub solvable: bool,
     /// The file.
     pub file: PathBuf,
-    /// Seed of the run's sensor noise and slip.
+    /// Seed of the run's sensor noise and faults.
     pub seed: u64,
     /// What the disc touched, in a collision (absent from rows written
     /// before it was recorded).

@@ -30,8 +30,9 @@ pub enum Fault {
     /// Each reading of each sensor is, with probability `rate`, the
     /// "nothing in range" level.
     Dropouts { rate: f64 },
-    /// Sensor `sensor`'s neighbour (the next to the left; the rightmost
-    /// for the leftmost) reads `fraction` of its voltage on top of its own.
+    /// Sensor `sensor`'s neighbour (the next to the left; for the leftmost,
+    /// the next to the right) reads `fraction` of its voltage on top of
+    /// its own.
     Crosstalk { sensor: usize, fraction: f64 },
     /// Every sensor reads `volts` more (sunlight).
     Ambient { volts: f64 },
@@ -208,8 +209,8 @@ pub struct Faults {
     faults: Vec<Fault>,
     adc: AdcProfile,
     rng: Pcg64,
-    /// A stuck sensor's frozen count, once frozen.
-    frozen: Option<u16>,
+    /// Each stuck sensor's frozen count, once frozen.
+    frozen: [Option<u16>; SENSOR_COUNT],
     /// The counts the planner read last cycle (latency).
     previous: Option<RawCounts>,
 }
@@ -221,7 +222,7 @@ impl Faults {
             faults: faults.to_vec(),
             adc,
             rng: Pcg64::seed_from_u64(seed ^ 0xfa17_fa17),
-            frozen: None,
+            frozen: [None; SENSOR_COUNT],
             previous: None,
         }
     }
@@ -234,7 +235,7 @@ impl Faults {
             match fault {
                 Fault::Dead { sensor } => raw[sensor] = 0,
                 Fault::Stuck { sensor, after_s } if t >= after_s => {
-                    raw[sensor] = *self.frozen.get_or_insert(raw[sensor]);
+                    raw[sensor] = *self.frozen[sensor].get_or_insert(raw[sensor]);
                 }
                 Fault::StuckClear { sensor } => raw[sensor] = volts(PHANTOM_V),
                 Fault::Spikes { rate } => {
@@ -255,7 +256,7 @@ impl Faults {
                     let to = if sensor + 1 < SENSOR_COUNT {
                         sensor + 1
                     } else {
-                        0
+                        sensor - 1
                     };
                     let add = (raw[sensor] as f64 * fraction).round() as u16;
                     raw[to] = raw[to].saturating_add(add).min(full);
@@ -380,11 +381,24 @@ mod tests {
         assert_eq!(stuck.sensors(RAW, 0.5), RAW);
         assert_eq!(stuck.sensors(RAW, 1.0), RAW);
         assert_eq!(stuck.sensors([9; 5], 2.0), [9, 9, 300, 9, 9]);
+        // Two stuck sensors keep a value each.
+        let two: Vec<Fault> = ["stuck:sensor=0,after=0", "stuck:sensor=4,after=0"]
+            .iter()
+            .map(|f| f.parse().unwrap())
+            .collect();
+        let mut both = Faults::new(&two, ADC, 1);
+        assert_eq!(both.sensors(RAW, 0.0), RAW);
+        assert_eq!(both.sensors([9; 5], 1.0), [100, 9, 9, 9, 500]);
         let phantom = counts(ADC, PHANTOM_V);
         assert_eq!(with("stuck-clear").sensors(RAW, 0.0)[2], phantom);
         assert_eq!(
             with("crosstalk:fraction=0.5").sensors(RAW, 0.0),
             [100, 200, 300, 550, 500]
+        );
+        // The leftmost's neighbour is the one to its right.
+        assert_eq!(
+            with("crosstalk:sensor=4,fraction=0.5").sensors(RAW, 0.0),
+            [100, 200, 300, 650, 500]
         );
         let sun = counts(ADC, 0.3);
         assert_eq!(with("ambient").sensors(RAW, 0.0), RAW.map(|r| r + sun));

@@ -30,7 +30,7 @@ enum Cmd {
         /// Planner.
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
-        /// Seed for sensor noise and slip.
+        /// Seed for sensor noise and the faults.
         #[arg(long, default_value_t = 1)]
         seed: u64,
         /// Write a picture of the run.

@@ -138,43 +138,50 @@ pub fn run(
             let mut rows = Vec::new();
             for &planner in planners {
                 bar.set_message(format!("{} {}", set.name, planner.name()));
-                // A planner over the known map senses nothing: its runs do
-                // not depend on the seed, so it runs once and its rows
-                // stand for every seed.
-                let once = planner.uses_map().then(|| {
-                    let cfg = SimConfig {
-                        planner,
-                        seed,
-                        ..SimConfig::default()
-                    };
-                    bench::run_scenarios(&set.worlds, &cfg, &bar)
-                });
-                for s in seed..seed + seeds {
-                    match &once {
-                        Some(first) if s == seed => rows.extend(first.iter().cloned()),
-                        Some(first) => {
-                            bar.inc(first.len() as u64);
-                            rows.extend(first.iter().map(|r| Row {
-                                seed: s,
-                                ..r.clone()
-                            }));
-                        }
-                        None => {
-                            let cfg = SimConfig {
-                                planner,
-                                seed: s,
-                                ..SimConfig::default()
-                            };
-                            rows.extend(bench::run_scenarios(&set.worlds, &cfg, &bar));
-                        }
-                    }
-                }
+                rows.extend(set_rows(set, planner, seed, seeds, &[], &bar));
             }
             rows
         })
         .collect();
     bar.finish_and_clear();
     out
+}
+
+/// `planner` on every world of `set`, seeds `seed .. seed + seeds`, with
+/// `faults`. A planner over the known map senses nothing: its runs do not
+/// depend on the seed, so it runs once and its rows stand for every seed.
+fn set_rows(
+    set: &Set,
+    planner: PlannerKind,
+    seed: u64,
+    seeds: u64,
+    faults: &[Fault],
+    bar: &ProgressBar,
+) -> Vec<Row> {
+    let cfg = |seed| SimConfig {
+        planner,
+        seed,
+        faults: faults.to_vec(),
+        ..SimConfig::default()
+    };
+    let once = planner
+        .uses_map()
+        .then(|| bench::run_scenarios(&set.worlds, &cfg(seed), bar));
+    let mut rows = Vec::new();
+    for s in seed..seed + seeds {
+        match &once {
+            Some(first) if s == seed => rows.extend(first.iter().cloned()),
+            Some(first) => {
+                bar.inc(first.len() as u64);
+                rows.extend(first.iter().map(|r| Row {
+                    seed: s,
+                    ..r.clone()
+                }));
+            }
+            None => rows.extend(bench::run_scenarios(&set.worlds, &cfg(s), bar)),
+        }
+    }
+    rows
 }
 
 /// One progress bar over `runs` runs (hidden without `progress`).
@@ -401,21 +408,10 @@ pub fn run_faults(
         .map(|fault| {
             let name = fault.map_or("none", |f| f.name()).to_string();
             bar.set_message(name.clone());
+            let faults: Vec<Fault> = fault.iter().copied().collect();
             let rows = still
                 .iter()
-                .map(|set| {
-                    (seed..seed + seeds)
-                        .flat_map(|s| {
-                            let cfg = SimConfig {
-                                planner,
-                                seed: s,
-                                faults: fault.iter().copied().collect(),
-                                ..SimConfig::default()
-                            };
-                            bench::run_scenarios(&set.worlds, &cfg, &bar)
-                        })
-                        .collect()
-                })
+                .map(|set| set_rows(set, planner, seed, seeds, &faults, &bar))
                 .collect();
             (name, rows)
         })

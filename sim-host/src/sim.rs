@@ -4,7 +4,7 @@
 //! before every centimetre, the first included), checks every motion
 //! exactly against the world and every stand (a turn on the spot, a pause)
 //! against the moving circles, and feeds the planner odometry (exact, or
-//! with seeded slip).
+//! with the `slip` fault's seeded slip).
 
 use crate::fault::{Fault, Faults};
 use crate::geom::V2;
@@ -154,7 +154,7 @@ const STALL_S: f64 = 0.1;
 pub struct SimConfig {
     /// Which planner drives.
     pub planner: PlannerKind,
-    /// Seed for sensor noise and odometry slip.
+    /// Seed for sensor noise and the faults.
     pub seed: u64,
     /// Sensor model.
     pub sensors: SensorMode,
@@ -168,8 +168,6 @@ pub struct SimConfig {
     pub speed: f64,
     /// Turn rate, rad/s.
     pub turn_rate: f64,
-    /// Odometry slip: (distance σ as a fraction, heading σ per radian turned).
-    pub slip: Option<(f64, f64)>,
     /// Faults injected (`--fault`).
     pub faults: Vec<Fault>,
     /// Budget: planner cycles.
@@ -190,7 +188,6 @@ impl Default for SimConfig {
             set_back: false,
             speed: 0.25,
             turn_rate: 2.0,
-            slip: None,
             faults: Vec::new(),
             max_steps: 3_000,
             max_length_ratio: 8.0,
@@ -407,7 +404,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     let mut seen: Vec<V2> = Vec::new();
     let mut faults = 0;
     let mut injected = Faults::new(&cfg.faults, cfg.adc, cfg.seed);
-    let slip = cfg.slip.or(injected.slip());
+    let slip = injected.slip();
     let mut outcome = Outcome::Timeout;
     let mut steps = 0;
     let debug = std::env::var_os("SIM_DEBUG").is_some();

@@ -178,15 +178,11 @@ impl<const N: usize> Grid<N> {
         let Some(end_cell) = self.cell(end) else {
             return;
         };
-        let (dx, dy) = from.to(end);
         let len = from.distance_mm(end) as i32;
         let mut last = None;
         let mut s = 0;
         while s < len {
-            let p = Point::saturating(
-                from.x as i32 + dx * s / len.max(1),
-                from.y as i32 + dy * s / len.max(1),
-            );
+            let p = along(from, end, s, len);
             if let Some(c) = self.cell(p) {
                 let (cx, cy) = p.to(self.centre(c));
                 let core = cx.abs() <= CORE_MM && cy.abs() <= CORE_MM;
@@ -231,15 +227,10 @@ impl<const N: usize> Grid<N> {
     /// Whether the straight line from `a` to `b` crosses only cells the
     /// wave reached (the first `radius_mm`, the rover's own disc, excepted).
     pub fn straight(&self, a: Point, b: Point) -> bool {
-        let (dx, dy) = a.to(b);
         let len = a.distance_mm(b) as i32;
         let mut s = (self.radius_mm as i32).min(len);
         while s <= len {
-            let p = Point::saturating(
-                a.x as i32 + dx * s / len.max(1),
-                a.y as i32 + dy * s / len.max(1),
-            );
-            match self.cell(p) {
+            match self.cell(along(a, b, s, len)) {
                 Some((x, y)) if self.wave[y][x] != FAR => {}
                 _ => return false,
             }
@@ -493,6 +484,13 @@ impl<const N: usize> FreeSpace<N> {
     }
 }
 
+/// The point `s` mm from `a` on the way to `b`, `len` mm away.
+fn along(a: Point, b: Point, s: i32, len: i32) -> Point {
+    let (dx, dy) = a.to(b);
+    let len = len.max(1);
+    Point::saturating(a.x as i32 + dx * s / len, a.y as i32 + dy * s / len)
+}
+
 /// The four neighbours of (x, y) inside an `n`×`n` grid.
 fn neighbours(x: usize, y: usize, n: usize) -> impl Iterator<Item = (usize, usize)> {
     [(0, 1), (2, 1), (1, 0), (1, 2)]
@@ -633,7 +631,7 @@ mod tests {
     }
 
     #[test]
-    fn a_step_the_guard_refused_blocks_the_cell_ahead() {
+    fn a_way_the_safety_rule_refuses_blocks_the_cell_ahead() {
         let cfg = test_config();
         let mut p = Small::new(cfg, Point::new(0, 0), Point::new(1_500, 0));
         let clear = counts(&cfg, [None; SENSOR_COUNT]);
@@ -641,8 +639,9 @@ mod tests {
         assert!(out.command.step_mm > 0);
         let ahead = Point::new(0, 0).offset(out.command.heading, cfg.robot_radius_mm + CELL_MM);
         assert!(!blocked(&p, ahead));
-        // The rover is where it was: the guard stopped the step, for
-        // something now too close to range in front.
+        // From the same spot, something too close to range in front: the
+        // safety rule refuses the way and no free beam leads lower on the
+        // wave.
         let mut near = clear;
         let cal = cfg.calibration(2).unwrap();
         near[2] = (0..cal.full_scale())

@@ -196,27 +196,23 @@ impl Senses {
         )
     }
 
-    /// Where beam `i` ends, seen from `pose`: see [`beam_end`].
+    /// Where beam `i` ends, seen from `pose`: on the obstacle it reads (at
+    /// the sensor face for "too close"), or at its reach; and whether it
+    /// met an obstacle.
     pub fn beam_end(&self, pose: Pose, i: usize) -> (Point, bool) {
-        beam_end(&self.config, &self.readings, pose, i)
+        let cfg = &self.config;
+        let i = i.min(SENSOR_COUNT - 1);
+        let (far, hit) = match self.readings[i] {
+            Reading::Range(mm) => (cfg.sensor_offset_mm.saturating_add(mm), true),
+            Reading::Clear => (cfg.sensor_offset_mm + cfg.sensor_range_mm, false),
+            Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm, true),
+        };
+        (
+            pose.position
+                .offset(pose.heading.add(cfg.sensor_angles[i]), far),
+            hit,
+        )
     }
-}
-
-/// Where beam `i` ends, seen from `pose` with `readings`: on the obstacle
-/// it reads (at the sensor face for "too close"), or at its reach; and
-/// whether it met an obstacle.
-pub fn beam_end(cfg: &Config, readings: &Readings, pose: Pose, i: usize) -> (Point, bool) {
-    let i = i.min(SENSOR_COUNT - 1);
-    let (far, hit) = match readings[i] {
-        Reading::Range(mm) => (cfg.sensor_offset_mm.saturating_add(mm), true),
-        Reading::Clear => (cfg.sensor_offset_mm + cfg.sensor_range_mm, false),
-        Reading::TooClose | Reading::Implausible => (cfg.sensor_offset_mm, true),
-    };
-    (
-        pose.position
-            .offset(pose.heading.add(cfg.sensor_angles[i]), far),
-        hit,
-    )
 }
 
 /// How many points [`Seen`] keeps.
