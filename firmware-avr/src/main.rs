@@ -166,8 +166,9 @@ fn main() -> ! {
     loop {
         avr_device::asm::wdr();
         // Commands.
+        let now = clock::millis();
         while let Some(b) = serial::read() {
-            let Some(req) = lines.feed(b) else {
+            let Some(req) = lines.feed(b, now) else {
                 continue;
             };
             match req {
@@ -186,6 +187,14 @@ fn main() -> ! {
                     executor.halt();
                     driving = false;
                     motors::set(&dp, Wheels::STOP);
+                }
+                // Not a command: it may have been a stop (`protocol`).
+                None => {
+                    executor.halt();
+                    driving = false;
+                    motors::set(&dp, Wheels::STOP);
+                    let _ = uwriteln!(out, "ERR");
+                    continue;
                 }
                 Some(Request::Memory) => {
                     let _ = uwriteln!(out, "M stack_peak={}", stack::peak() as u32);

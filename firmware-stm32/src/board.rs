@@ -115,7 +115,7 @@ pub fn run() -> ! {
     loop {
         watchdog.feed();
         while let Ok(b) = rx.read() {
-            let Some(req) = lines.feed(b) else {
+            let Some(req) = lines.feed(b, ms) else {
                 continue;
             };
             let reply = match req {
@@ -136,6 +136,12 @@ pub fn run() -> ! {
                     executor.halt();
                     driving = false;
                     "OK\n"
+                }
+                // Not a command: it may have been a stop (`protocol`).
+                None => {
+                    executor.halt();
+                    driving = false;
+                    "ERR\n"
                 }
                 // The counts, then what the planner reads from each.
                 Some(Request::Sensors) => match last_raw {

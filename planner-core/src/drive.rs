@@ -14,14 +14,22 @@ use crate::command::{Command, Guard};
 use crate::fixed::{mul_q14, sat_i16, Angle, Point};
 use crate::Pose;
 
-/// The wheels and encoders of a rover.
+/// The wheels and encoders of a rover, checked by [`Body::new`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct Body {
-    /// Wheel travel per encoder tick, µm.
-    pub um_per_tick: u16,
-    /// Distance between the wheel contact points, mm.
-    pub wheel_base_mm: u16,
+    um_per_tick: u16,
+    wheel_base_mm: u16,
+}
+
+/// Why [`Body::new`] refused a body.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum BodyError {
+    /// Wheel travel per tick outside [`Body::UM_PER_TICK`].
+    UmPerTick(u16),
+    /// Wheel base outside [`Body::WHEEL_BASE_MM`].
+    WheelBase(u16),
 }
 
 impl Body {
@@ -32,13 +40,48 @@ impl Body {
         wheel_base_mm: 130,
     };
 
+    /// Wheel travel per tick a body may have, µm: a tick of 1 µm to 1 cm.
+    pub const UM_PER_TICK: core::ops::RangeInclusive<u16> = 1..=10_000;
+
+    /// Wheel bases a body may have, mm.
+    pub const WHEEL_BASE_MM: core::ops::RangeInclusive<u16> = 20..=2_000;
+
+    /// A body with `um_per_tick` µm of wheel travel per encoder tick and
+    /// `wheel_base_mm` between the wheels' contact points; outside the
+    /// ranges above it is refused (a zero base would divide by zero, a huge
+    /// tick overflow the odometry's formats).
+    pub const fn new(um_per_tick: u16, wheel_base_mm: u16) -> Result<Body, BodyError> {
+        if um_per_tick < *Self::UM_PER_TICK.start() || um_per_tick > *Self::UM_PER_TICK.end() {
+            return Err(BodyError::UmPerTick(um_per_tick));
+        }
+        if wheel_base_mm < *Self::WHEEL_BASE_MM.start()
+            || wheel_base_mm > *Self::WHEEL_BASE_MM.end()
+        {
+            return Err(BodyError::WheelBase(wheel_base_mm));
+        }
+        Ok(Body {
+            um_per_tick,
+            wheel_base_mm,
+        })
+    }
+
+    /// Wheel travel per encoder tick, µm.
+    pub const fn um_per_tick(self) -> u16 {
+        self.um_per_tick
+    }
+
+    /// Distance between the wheel contact points, mm.
+    pub const fn wheel_base_mm(self) -> u16 {
+        self.wheel_base_mm
+    }
+
     /// Heading change per tick of wheel difference, 1/2³² turn:
     /// Δθ = (Δr − Δl)·s / b radians (the differential-drive model).
     fn angle_per_tick(self) -> i32 {
         // 2³² / (2π) = 683,565,275.6; s/b in µm/µm. Done once, at build.
         let num = self.um_per_tick as i64 * 683_565_276;
-        let den = (self.wheel_base_mm as i64 * 1_000).max(1);
-        (num / den).clamp(0, i32::MAX as i64) as i32
+        let den = self.wheel_base_mm as i64 * 1_000;
+        (num / den) as i32
     }
 }
 
@@ -52,6 +95,8 @@ pub struct Odometry {
     travelled: u32,
     q12_per_tick: i32,
     angle_per_tick: i32,
+    /// Most ticks a wheel that one integration takes (see [`Odometry::update`]).
+    piece_ticks: u16,
 }
 
 impl Odometry {
@@ -62,9 +107,17 @@ impl Odometry {
             y: 0,
             heading: 0,
             travelled: 0,
-            q12_per_tick: ((body.um_per_tick as i32) * 4_096 + 500) / 1_000,
+            q12_per_tick: 0,
             angle_per_tick: body.angle_per_tick(),
+            piece_ticks: 0,
         };
+        o.q12_per_tick = ((body.um_per_tick as i32) * 4_096 + 500) / 1_000;
+        // A piece of `n` ticks a wheel moves at most n·q12 (1/4,096 mm),
+        // which `mul_q14` takes below 2³¹/2¹⁴ = 131,072; and turns by at
+        // most 2n·angle_per_tick, below 2³¹.
+        let by_length = 131_071 / o.q12_per_tick;
+        let by_angle = i32::MAX / 2 / o.angle_per_tick.max(1);
+        o.piece_ticks = by_length.min(by_angle).clamp(1, i16::MAX as i32) as u16;
         o.set_pose(pose);
         o
     }
@@ -78,20 +131,41 @@ impl Odometry {
 
     /// Add the ticks counted since the last update (signed: backwards is
     /// negative). Integrates along the mean heading of the interval.
+    ///
+    /// Any count is taken: a long interval (a stalled control loop) is
+    /// integrated in equal pieces small enough for the 32-bit formats
+    /// (32 ticks a wheel for [`Body::REFERENCE`], 130 ms at cruise speed),
+    /// as if the wheels had turned evenly over it.
     pub fn update(&mut self, left: i16, right: i16) {
+        let most = left.unsigned_abs().max(right.unsigned_abs());
+        let pieces = most.div_ceil(self.piece_ticks).max(1) as i32;
+        let (mut done_l, mut done_r) = (0, 0);
+        for k in 1..=pieces {
+            let (l, r) = (left as i32 * k / pieces, right as i32 * k / pieces);
+            self.integrate(l - done_l, r - done_r);
+            (done_l, done_r) = (l, r);
+        }
+    }
+
+    /// One piece of [`Odometry::update`]: `left` and `right` at most
+    /// `piece_ticks` each.
+    fn integrate(&mut self, left: i32, right: i32) {
         if left == 0 && right == 0 {
             return;
         }
-        let dtheta = (right as i32 - left as i32).wrapping_mul(self.angle_per_tick);
+        let dtheta = (right - left) * self.angle_per_tick;
         let mid = Angle((self.heading.wrapping_add((dtheta / 2) as u32) >> 16) as u16);
         self.heading = self.heading.wrapping_add(dtheta as u32);
-        let d = (left as i32 + right as i32) * self.q12_per_tick / 2;
+        let d = (left + right) * self.q12_per_tick / 2;
         self.x = self.x.saturating_add(mul_q14(d, mid.cos()));
         self.y = self.y.saturating_add(mul_q14(d, mid.sin()));
         self.travelled = self.travelled.wrapping_add(d.unsigned_abs());
     }
 
-    /// The pose in the planner's formats.
+    /// The pose in the planner's formats. Its positions are 16-bit mm, so
+    /// the rover works within ±32.767 m of the origin `set_pose` gives: past
+    /// that the pose stays at the edge (the simulator refuses worlds that
+    /// reach past it; a goal out of it does not parse).
     pub fn pose(&self) -> Pose {
         Pose {
             position: Point::new(
@@ -333,6 +407,67 @@ mod tests {
         assert_eq!(o.pose().heading, Angle::ZERO);
         // Path length is floored: 1,000 × 3,981 / 4,096 = 971.9.
         assert_eq!(o.travelled_mm(), 971);
+    }
+
+    /// A long interval (a stalled loop) moves the pose as its ticks one by
+    /// one would: 33 ticks a wheel overflowed the 32-bit product before.
+    #[test]
+    fn a_long_interval_is_its_ticks_one_by_one() {
+        for (l, r) in [(33, 33), (1_000, 1_000), (-700, 700), (i16::MAX, i16::MAX)] {
+            let mut at_once = Odometry::new(Body::REFERENCE, origin());
+            at_once.update(l, r);
+            let mut by_tick = Odometry::new(Body::REFERENCE, origin());
+            let n = l.unsigned_abs().max(r.unsigned_abs()) as i32;
+            for k in 1..=n {
+                let step = |t: i16| (t as i32 * k / n - t as i32 * (k - 1) / n) as i16;
+                by_tick.update(step(l), step(r));
+            }
+            let (a, b) = (at_once.pose(), by_tick.pose());
+            assert!(
+                (a.position.x - b.position.x).abs() <= 1
+                    && (a.position.y - b.position.y).abs() <= 1
+                    && a.heading.0.abs_diff(b.heading.0) <= 1,
+                "{l} {r}: {a:?} against {b:?}"
+            );
+        }
+        // Straight on from the origin: 33 ticks are 32.1 mm ahead, not behind.
+        let mut o = Odometry::new(Body::REFERENCE, origin());
+        o.update(33, 33);
+        assert_eq!(o.pose().position, Point::new(32, 0));
+    }
+
+    /// Every body `Body::new` accepts takes any count, both extremes of
+    /// both ranges included (the tests build with overflow checks).
+    #[test]
+    fn every_body_takes_any_count() {
+        let (um, base) = (Body::UM_PER_TICK, Body::WHEEL_BASE_MM);
+        for (s, b) in [
+            (*um.start(), *base.start()),
+            (*um.end(), *base.start()),
+            (*um.start(), *base.end()),
+            (*um.end(), *base.end()),
+        ] {
+            let mut o = Odometry::new(Body::new(s, b).unwrap(), origin());
+            for (l, r) in [(i16::MAX, i16::MAX), (i16::MIN, i16::MAX), (i16::MIN, 7)] {
+                o.update(l, r);
+            }
+        }
+        assert_eq!(Body::new(0, 130), Err(BodyError::UmPerTick(0)));
+        assert_eq!(Body::new(10_001, 130), Err(BodyError::UmPerTick(10_001)));
+        assert_eq!(Body::new(972, 0), Err(BodyError::WheelBase(0)));
+        assert_eq!(Body::new(972, 19), Err(BodyError::WheelBase(19)));
+        assert_eq!(Body::new(972, 130), Ok(Body::REFERENCE));
+    }
+
+    /// Past the planner's 16-bit millimetres (±32.767 m), the pose stays at
+    /// the edge: it does not jump to the other side.
+    #[test]
+    fn the_pose_saturates_at_the_edge_of_its_format() {
+        let mut o = Odometry::new(Body::REFERENCE, origin());
+        for _ in 0..40 {
+            o.update(i16::MAX / 32, i16::MAX / 32);
+        }
+        assert_eq!(o.pose().position, Point::new(i16::MAX, 0));
     }
 
     #[test]

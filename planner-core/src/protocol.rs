@@ -1,5 +1,15 @@
-//! The serial text protocol both firmwares speak: one command per line (`\n` ends it, `\r` is
-//! ignored), fields separated by spaces, integers in decimal.
+//! The serial text protocol both firmwares speak: one command per line (`\n` ends it), fields
+//! separated by spaces (`\r` and tabs count as spaces), integers in decimal.
+//!
+//! A stop is never lost to noise on the line ([`LineReader`]):
+//! - a pause of more than [`STALE_MS`] inside a line drops what came before
+//!   it, so a fragment (line noise, a half-sent command) is not glued onto
+//!   the next command;
+//! - a line that is not a command stops the rover, as `S` does, and is
+//!   answered `ERR`: it may have been a stop.
+//!
+//! A console should send each line whole (ravedude's and terminals in line
+//! mode do).
 //!
 //! | line | meaning | reply |
 //! |---|---|---|
@@ -19,7 +29,9 @@
 //! target in front of each sensor in turn to check the wiring and the
 //! calibration; the line is the same on both firmwares ([`sensor_readings`]).
 //!
-//! Anything else gets `ERR`. Telemetry (the AVR's; the STM32 logs over
+//! A line that is not a command gets `ERR` and stops the rover; a command
+//! refused in the state the rover is in (`P` while driving) gets `ERR`
+//! alone. Telemetry (the AVR's; the STM32 logs over
 //! defmt instead), one line per planner step:
 //! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
 //! with headings in binary angle units (65,536 = 360°) and status one of
@@ -84,9 +96,8 @@ fn parse_i16(field: &[u8]) -> Option<i16> {
 /// Parse one line (without its `\n`).
 pub fn parse(line: &[u8]) -> Option<Request> {
     let mut f = line
-        .split(|&b| b == b' ')
-        .filter(|s| !s.is_empty())
-        .map(|s| s.strip_suffix(b"\r").unwrap_or(s));
+        .split(|&b| matches!(b, b' ' | b'\r' | b'\t'))
+        .filter(|s| !s.is_empty());
     let cmd = f.next()?;
     let mut num = || f.next().and_then(parse_i16);
     let req = match cmd {
@@ -176,11 +187,16 @@ pub fn write_number(v: u16, mut out: impl FnMut(u8)) {
     }
 }
 
+/// A pause inside a line longer than this, ms, drops the bytes before it.
+pub const STALE_MS: u32 = 1_000;
+
 /// Gathers received bytes into lines and parses each.
 #[derive(Clone, Debug, Default)]
 pub struct LineReader {
     line: heapless::Vec<u8, LINE_CAPACITY>,
     overlong: bool,
+    /// When the last byte came, ms.
+    last_ms: u32,
 }
 
 impl LineReader {
@@ -189,9 +205,17 @@ impl LineReader {
         LineReader::default()
     }
 
-    /// Take one byte. At the end of a line (`\n`): `Some` of what it says,
-    /// `Some(None)` for a line that is not a command (too long included).
-    pub fn feed(&mut self, b: u8) -> Option<Option<Request>> {
+    /// Take one byte, received at `now_ms` (a millisecond clock that may
+    /// wrap). At the end of a line (`\n`): `Some` of what it says,
+    /// `Some(None)` for a line that is not a command (too long included),
+    /// on which the firmware stops. Bytes before a pause of more than
+    /// [`STALE_MS`] are dropped first.
+    pub fn feed(&mut self, b: u8, now_ms: u32) -> Option<Option<Request>> {
+        if now_ms.wrapping_sub(self.last_ms) > STALE_MS {
+            self.line.clear();
+            self.overlong = false;
+        }
+        self.last_ms = now_ms;
         if b != b'\n' {
             if self.line.push(b).is_err() {
                 self.overlong = true;
@@ -217,6 +241,8 @@ mod tests {
     fn lines_parse_to_requests() {
         assert_eq!(parse(b"G 1200 -350"), Some(Request::Goal(1200, -350)));
         assert_eq!(parse(b"P 0 0 90\r"), Some(Request::Pose(0, 0, 90)));
+        assert_eq!(parse(b"G 1 2 \r"), Some(Request::Goal(1, 2)));
+        assert_eq!(parse(b"\tS\t\r"), Some(Request::Stop));
         assert_eq!(parse(b"S"), Some(Request::Stop));
         assert_eq!(parse(b"M"), Some(Request::Memory));
         assert_eq!(parse(b"R  10   20"), Some(Request::Replay(10, 20)));
@@ -291,7 +317,7 @@ mod tests {
             .chain(long.iter())
             .chain(b"\nM\n".iter())
         {
-            if let Some(req) = r.feed(b) {
+            if let Some(req) = r.feed(b, 0) {
                 got.push(req).unwrap();
             }
         }
@@ -303,6 +329,33 @@ mod tests {
                 None,
                 Some(Request::Memory)
             ]
+        );
+    }
+
+    /// A fragment then, after a pause, a stop: the fragment is dropped and
+    /// the stop stands. Without the pause the glued line is refused (and
+    /// the firmware stops on it all the same).
+    #[test]
+    fn a_stale_fragment_is_not_glued_onto_the_next_line() {
+        let feed = |r: &mut LineReader, bytes: &[u8], ms: u32| {
+            bytes.iter().filter_map(|&b| r.feed(b, ms)).last()
+        };
+        let mut r = LineReader::new();
+        assert_eq!(feed(&mut r, b"G 10", 5), None);
+        assert_eq!(
+            feed(&mut r, b"S\n", 5 + STALE_MS + 1),
+            Some(Some(Request::Stop))
+        );
+        assert_eq!(feed(&mut r, b"G 10", 4_000), None);
+        assert_eq!(feed(&mut r, b"S\n", 4_000 + STALE_MS), Some(None));
+        // Across the clock's wrap.
+        assert_eq!(feed(&mut r, b"xx", u32::MAX - 10), None);
+        assert_eq!(feed(&mut r, b"S\n", STALE_MS), Some(Some(Request::Stop)));
+        // An overlong fragment is dropped too.
+        assert_eq!(feed(&mut r, &[b'7'; 40], 9_000), None);
+        assert_eq!(
+            feed(&mut r, b"M\n", 9_000 + STALE_MS + 1),
+            Some(Some(Request::Memory))
         );
     }
 

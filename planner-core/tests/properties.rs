@@ -1,7 +1,7 @@
 //! Property tests of the planner's invariants over any input.
 
 use planner_core::command::{free_distance_mm, guard};
-use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY};
+use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY, STALE_MS};
 use planner_core::route::{RouteConfig, RouteMap, RoutePlanner};
 use planner_core::{
     AdcProfile, Angle, Config, ConfigBuilder, EscapeConfig, Guard, Output, Planner, Point, Pose,
@@ -141,20 +141,30 @@ proptest! {
         }
     }
 
-    /// Any bytes on the serial line: the reader never panics, answers once
-    /// per `\n`, and a line it kept whole means what `parse` says of it;
-    /// a longer one is refused.
+    /// Any bytes on the serial line, with any pauses between them: the
+    /// reader never panics, answers once per `\n`, and a line it kept whole
+    /// since the last pause of more than `STALE_MS` means what `parse` says
+    /// of it; a longer one is refused.
     #[test]
     fn the_line_reader_takes_any_bytes(
         bytes in prop::collection::vec(
-            prop_oneof![4 => any::<u8>(), 1 => Just(b'\n'), 2 => Just(b' '), 3 => b'0'..=b'9'],
+            (
+                prop_oneof![4 => any::<u8>(), 1 => Just(b'\n'), 2 => Just(b' '), 3 => b'0'..=b'9'],
+                prop_oneof![8 => 0..=2u32, 1 => 0..=2 * STALE_MS, 1 => any::<u32>()],
+            ),
             0..200,
         ),
+        start in any::<u32>(),
     ) {
         let mut reader = LineReader::new();
         let mut line = Vec::new();
-        for &b in &bytes {
-            let got = reader.feed(b);
+        let mut now = start;
+        for &(b, pause) in &bytes {
+            now = now.wrapping_add(pause);
+            if pause > STALE_MS {
+                line.clear();
+            }
+            let got = reader.feed(b, now);
             if b == b'\n' {
                 let want = if line.len() <= LINE_CAPACITY { parse(&line) } else { None };
                 prop_assert_eq!(got, Some(want));

@@ -346,8 +346,8 @@ fn drive_mounted(
     use sim_host::sensor::{SensorMode, VirtualSensors};
     use sim_host::world::World;
     let world = World::from_scenario(sc);
-    let m_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick as f64 / 1e6;
-    let base = planner_core::drive::Body::REFERENCE.wheel_base_mm as f64 / 1e3;
+    let m_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick() as f64 / 1e6;
+    let base = planner_core::drive::Body::REFERENCE.wheel_base_mm() as f64 / 1e3;
     let adc = planner_core::AdcProfile::AVR_10BIT_5V;
     // The firmware's geometry: its default configuration's.
     let cfg = planner_core::ConfigBuilder::new(adc)

@@ -106,3 +106,46 @@ fn the_serial_protocol_as_a_user_meets_it() {
     assert_eq!(reply(&mut a, "P 0 0 0").as_deref(), Some("OK"));
     assert_eq!(a.read_line(50), None, "no READY again: no reset");
 }
+
+/// A stop is never lost to a fragment on the line: after a pause the
+/// fragment is dropped and `S` stops the rover; glued onto `S` without a
+/// pause, the line is refused and stops the rover all the same. A space
+/// before the `\r` is a space.
+#[test]
+fn a_stop_is_never_lost() {
+    let mut a = Avr::boot();
+    {
+        let mut pins = a.avr.pins();
+        {
+            let mv = 280 * 3_300 / 5_000;
+            pins.adc0().set_mv(mv);
+            pins.adc1().set_mv(mv);
+            pins.adc2().set_mv(mv);
+            pins.adc3().set_mv(mv);
+            pins.adc4().set_mv(mv);
+        }
+    }
+    a.run_us(5_000);
+    let driving = |a: &mut Avr| (0..200).map(|_| wheels_for_1ms(a).2).sum::<u32>() > 0;
+    let start = |a: &mut Avr| {
+        assert_eq!(reply(a, "G 3000 200 \r").as_deref(), Some("OK"));
+        assert!(driving(a), "the motors run after G");
+    };
+
+    start(&mut a);
+    a.send(b"G 10");
+    a.run_us(1_200_000);
+    assert!(driving(&mut a), "a fragment alone changes nothing");
+    assert_eq!(reply(&mut a, "S").as_deref(), Some("OK"), "after a pause");
+    assert!(!driving(&mut a), "stopped");
+
+    start(&mut a);
+    a.send(b"G 10");
+    assert_eq!(reply(&mut a, "S").as_deref(), Some("ERR"), "glued on");
+    assert!(!driving(&mut a), "stopped all the same");
+
+    start(&mut a);
+    a.send(b"\x00\xff#");
+    assert_eq!(reply(&mut a, "").as_deref(), Some("ERR"), "noise");
+    assert!(!driving(&mut a), "noise stops the rover");
+}
