@@ -30,11 +30,6 @@ pub fn start(dp: &Dp) {
         .write(|w| unsafe { w.bits(ADEN | ADSC | ADIE | ADPS_128) });
 }
 
-/// Stop sampling (replay mode: nothing may interrupt the measured step).
-pub fn stop(dp: &Dp) {
-    dp.ADC.adcsra().write(|w| unsafe { w.bits(0) });
-}
-
 #[avr_device::interrupt(atmega328p)]
 fn ADC() {
     let dp = steal();

@@ -1,4 +1,4 @@
-//! What the bench binaries (`f32-step`, `costs`) share: start the clock
+//! What the bench binaries (`replay`, `f32-step`, `costs`) share: start the clock
 //! and the serial line with interrupts on, no control tick, and the default
 //! configuration; stop (spin) where the firmware would have nothing to do.
 
@@ -12,13 +12,19 @@ pub fn halt() -> ! {
     }
 }
 
-/// Timers and serial on, the control tick off; the default configuration.
-pub fn start() -> Config {
+/// Timers and serial on, the control tick off.
+pub fn init() {
     let Some(dp) = board::Dp::take() else { halt() };
     clock::init(&dp);
     clock::stop_tick(&dp);
     serial::init(&dp);
     // SAFETY: every shared static is behind an interrupt-free Mutex.
     unsafe { avr_device::interrupt::enable() };
+}
+
+/// [`init`], and the default configuration as a value.
+#[allow(dead_code)] // the benches'; `replay` loads it in place
+pub fn start() -> Config {
+    init();
     progmem::config()
 }

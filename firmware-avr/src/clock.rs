@@ -20,14 +20,10 @@ pub fn init(dp: &Dp) {
     dp.TC1.timsk1().write(|w| unsafe { w.bits(0b1) }); // TOIE1
 }
 
-/// Stop the control tick (replay mode).
+/// Stop the control tick (the replay and bench binaries).
+#[allow(dead_code)] // not the firmware's
 pub fn stop_tick(dp: &Dp) {
     dp.TC2.timsk2().write(|w| unsafe { w.bits(0) });
-}
-
-/// Restart the control tick.
-pub fn start_tick(dp: &Dp) {
-    dp.TC2.timsk2().write(|w| unsafe { w.bits(0b10) });
 }
 
 #[avr_device::interrupt(atmega328p)]

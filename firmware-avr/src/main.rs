@@ -20,14 +20,13 @@ mod clock;
 mod encoders;
 mod motors;
 mod progmem;
-mod replay;
 mod serial;
 mod stack;
+mod timed;
 
-use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use planner_core::protocol::{self, Request, SensorField};
-use planner_core::{Angle, Config, Guard, IrSensors, Planner, Point, Pose, RawCounts, Status};
+use planner_core::{Angle, Config, Guard, IrSensors, Planner, Point, Pose, Status};
 use serial::Serial;
 use ufmt::{uwrite, uwriteln};
 
@@ -64,56 +63,6 @@ fn watchdog_on(dp: &board::Dp) {
         dp.WDT.wdtcsr().write(|w| unsafe { w.bits(0x18) }); // WDCE | WDE
         dp.WDT.wdtcsr().write(|w| unsafe { w.bits(0x0d) }); // WDE, 0.5 s
     });
-}
-
-/// One planner step, timed in CPU cycles. The fences keep the compiler from
-/// moving work across the two clock reads.
-#[inline(never)]
-fn timed_step(planner: &mut Planner, pose: Pose, raw: &RawCounts) -> (planner_core::Output, u32) {
-    let t0 = clock::stamp();
-    compiler_fence(Ordering::SeqCst);
-    let out = planner.step_raw(core::hint::black_box(pose), core::hint::black_box(raw));
-    let out = core::hint::black_box(out);
-    compiler_fence(Ordering::SeqCst);
-    let t1 = clock::stamp();
-    (out, t1.cycles().wrapping_sub(t0.cycles()))
-}
-
-/// In replay mode the firmware's guard looks and steps run with interrupts
-/// off, so that their cycle counts are theirs alone: a Timer1 overflow
-/// interrupt (47 cycles) or a received byte (146) inside the span would be
-/// counted too, depending on when the harness's bytes arrived. The clock
-/// still reads exactly: one overflow pending while interrupts are off is
-/// counted by `clock::Stamp::cycles`, and the replayed spans are far below the
-/// 65,536 cycles between two overflows (the profiler's own count checks
-/// this, `tests/tests/avr_profile.rs`).
-impl replay::Replay for Planner {
-    fn guard(&mut self, raw: &RawCounts, remaining_mm: u16) -> (Guard, u32) {
-        avr_device::interrupt::free(|_| {
-            let t0 = clock::stamp();
-            compiler_fence(Ordering::SeqCst);
-            let g = self.guard_raw(
-                core::hint::black_box(raw),
-                core::hint::black_box(remaining_mm),
-            );
-            let g = core::hint::black_box(g);
-            compiler_fence(Ordering::SeqCst);
-            let t1 = clock::stamp();
-            (g, t1.cycles().wrapping_sub(t0.cycles()))
-        })
-    }
-    fn step(&mut self, pose: Pose, raw: &RawCounts) -> (planner_core::Output, u32) {
-        avr_device::interrupt::free(|_| timed_step(self, pose, raw))
-    }
-}
-
-/// Replay mode (see [`protocol`]): frames in, commands and cycles out.
-fn replay(dp: &board::Dp, planner: &mut Planner) {
-    adc::stop(dp);
-    clock::stop_tick(dp);
-    replay::serve(planner);
-    clock::start_tick(dp);
-    adc::start(dp);
 }
 
 #[avr_device::entry]
@@ -219,11 +168,6 @@ fn main() -> ! {
                     serial::write(b'\n');
                     continue;
                 }
-                Some(Request::Replay(x, y)) if !driving => {
-                    let _ = uwriteln!(out, "OK");
-                    planner.set_goal(Point::new(x, y));
-                    replay(&dp, planner);
-                }
                 _ => {
                     let _ = uwriteln!(out, "ERR");
                     continue;
@@ -251,7 +195,7 @@ fn main() -> ! {
                 motors::set(&dp, Wheels::STOP);
                 continue;
             };
-            let (step, cycles) = timed_step(planner, pose, &raw);
+            let (step, cycles) = timed::step(planner, pose, &raw);
             let _ = uwriteln!(
                 out,
                 "T {} {} {} {} {} {} {} {}",

@@ -50,6 +50,7 @@ pub fn read() -> Option<u8> {
 }
 
 /// The next received byte, waiting for it (resetting the watchdog).
+#[allow(dead_code)] // the replay and bench binaries'
 pub fn read_blocking() -> u8 {
     loop {
         if let Some(b) = read() {
@@ -60,6 +61,7 @@ pub fn read_blocking() -> u8 {
 }
 
 /// A little-endian `u16` from the next two bytes (blocking).
+#[allow(dead_code)] // the replay and bench binaries'
 pub fn read_u16_le() -> u16 {
     let lo = read_blocking() as u16;
     lo | (read_blocking() as u16) << 8

@@ -37,7 +37,9 @@ pub enum Status {
     /// `EscapeConfig::follow` off): stop, the goal cannot be reached. The
     /// step is zero.
     Unreachable,
-    /// A sensor gave a reading it cannot produce: stop (the step is zero).
+    /// A sensor gave a reading it cannot produce, or its count stayed the
+    /// same over views in which a working sensor's would have changed
+    /// ([`crate::sensors::FreezeWatch`]): stop (the step is zero).
     SensorFault,
 }
 
@@ -65,6 +67,23 @@ impl Status {
     }
 }
 
+/// A rule of the step that an [`Output`] broke ([`Output::broken_rule`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BrokenRule {
+    /// The step is longer than the sensors' range.
+    BeyondRange,
+    /// A heading outside the sensed sector with a step: only a turn may
+    /// face where no beam looked.
+    UnsensedStep,
+    /// The step enters space the readings it was planned from do not show
+    /// free (the safety rule, docs/algorithms.md §5).
+    NotFree,
+    /// A step planned from an implausible reading (a sensor fault).
+    OnAFault,
+    /// A step with a status other than moving: every stop is a zero step.
+    StopWithStep,
+}
+
 /// The planner's output for one cycle.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
@@ -76,6 +95,34 @@ pub struct Output {
 }
 
 impl Output {
+    /// The first rule of the step this output breaks, planned at `pose`
+    /// from `readings` with `cfg`; `None` when it keeps them all. The
+    /// property tests and the fuzz target hold every planner to it.
+    pub fn broken_rule(
+        self,
+        cfg: &Config,
+        readings: &Readings,
+        pose: crate::Pose,
+    ) -> Option<BrokenRule> {
+        let step = self.command.step_mm;
+        let rel = self.command.heading.sub(pose.heading);
+        if step > cfg.sensor_range_mm() {
+            Some(BrokenRule::BeyondRange)
+        } else if step == 0 {
+            None
+        } else if self.status != Status::Moving {
+            Some(BrokenRule::StopWithStep)
+        } else if rel.abs_signed() > cfg.sector_half_width().0 {
+            Some(BrokenRule::UnsensedStep)
+        } else if readings.contains(&Reading::Implausible) {
+            Some(BrokenRule::OnAFault)
+        } else if step > free_distance_mm(cfg, readings, rel) {
+            Some(BrokenRule::NotFree)
+        } else {
+            None
+        }
+    }
+
     /// Stay put, facing `heading`, with `status`.
     pub fn stop(heading: Angle, status: Status) -> Output {
         Output {

@@ -8,7 +8,7 @@
 //! (built at start-up, the AVR image was 2,434 bytes larger and the STM32's
 //! 4,116: `cargo xtask avr-report`, `cargo xtask stm32-report`).
 
-use crate::fixed::{Angle, Dir, FORCE_ONE};
+use crate::fixed::{in_range, Angle, Dir, FORCE_ONE};
 use crate::sensors::{AdcProfile, Calibration, CalibrationError, FOLD_BACK_MM, SENSOR_COUNT};
 
 /// The largest gain (ξ_att, ξ_MP, ξ_sen) a configuration takes: 16 force
@@ -72,6 +72,9 @@ pub struct Config {
     pub(crate) diagonal_tolerance: Angle,
     pub(crate) direct_tolerance: Angle,
     pub(crate) escape: crate::escape::EscapeConfig,
+    /// Views after an advance with one count before a sensor is frozen
+    /// ([`crate::sensors::FreezeWatch`]; 0: never).
+    pub(crate) frozen_views: u8,
     pub(crate) calibration: [Calibration; SENSOR_COUNT],
     /// The sensor faces sit at least their minimum range behind the rim
     /// ([`ConfigBuilder::sensors_set_back`]). Only with the `set-back`
@@ -122,6 +125,7 @@ impl Config {
             retreat_per_drop_mm: 0,
             follow: false,
         },
+        frozen_views: 0,
         calibration: [Calibration::UNSET; SENSOR_COUNT],
         #[cfg(feature = "set-back")]
         set_back: false,
@@ -234,6 +238,7 @@ pub struct ConfigBuilder {
     diagonal_tolerance_deg: i16,
     direct_tolerance_deg: i16,
     escape: crate::escape::EscapeConfig,
+    frozen_views: u8,
 }
 
 impl ConfigBuilder {
@@ -254,6 +259,7 @@ impl ConfigBuilder {
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
     /// | DM tolerance | 5° from the target bearing | ours |
+    /// | frozen after | 8 views | ours: a count the same in 8 views in a row, each after an advance, is a sensor stuck ([`crate::sensors::FreezeWatch`]) |
     pub const fn new(adc: AdcProfile) -> Self {
         ConfigBuilder {
             adc,
@@ -272,7 +278,18 @@ impl ConfigBuilder {
             diagonal_tolerance_deg: 5,
             direct_tolerance_deg: 5,
             escape: crate::escape::EscapeConfig::DEFAULT,
+            frozen_views: 8,
         }
+    }
+
+    /// A sensor whose count is the same in `views` views in a row, each
+    /// after an advance, is stuck: the planner stops with a sensor fault
+    /// ([`crate::sensors::FreezeWatch`]). 0 never calls a sensor stuck:
+    /// for noise-free sensors (a simulation's), whose count is the same
+    /// whenever the distance is.
+    pub const fn frozen_after_views(mut self, views: u8) -> Self {
+        self.frozen_views = views;
+        self
     }
 
     /// Robot radius in mm.
@@ -442,6 +459,7 @@ impl ConfigBuilder {
             diagonal_tolerance: Angle::from_deg(self.diagonal_tolerance_deg),
             direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),
             escape: self.escape,
+            frozen_views: self.frozen_views,
             calibration: [c; SENSOR_COUNT],
             #[cfg(feature = "set-back")]
             set_back,
@@ -453,11 +471,6 @@ impl ConfigBuilder {
 /// `radius_mm` sit at least their minimum range behind its rim.
 const fn is_set_back(offset_mm: u16, radius_mm: u16) -> bool {
     offset_mm as u32 + FOLD_BACK_MM as u32 <= radius_mm as u32
-}
-
-/// `lo ≤ v ≤ hi` (`RangeInclusive::contains` is not a `const fn`).
-pub(crate) const fn in_range(v: i32, lo: i32, hi: i32) -> bool {
-    lo <= v && v <= hi
 }
 
 /// The largest `d` (mm) with `mul_q14(d, |sin|) ≤ half_width`: the

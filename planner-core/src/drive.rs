@@ -133,17 +133,18 @@ impl Odometry {
     /// negative). Integrates along the mean heading of the interval.
     ///
     /// Any count is taken: a long interval (a stalled control loop) is
-    /// integrated in equal pieces small enough for the 32-bit formats
-    /// (32 ticks a wheel for [`Body::REFERENCE`], 130 ms at cruise speed),
-    /// as if the wheels had turned evenly over it.
+    /// integrated in pieces small enough for the 32-bit formats (at most
+    /// 32 ticks a wheel for [`Body::REFERENCE`], 130 ms at cruise speed).
     pub fn update(&mut self, left: i16, right: i16) {
-        let most = left.unsigned_abs().max(right.unsigned_abs());
-        let pieces = most.div_ceil(self.piece_ticks).max(1) as i32;
-        let (mut done_l, mut done_r) = (0, 0);
-        for k in 1..=pieces {
-            let (l, r) = (left as i32 * k / pieces, right as i32 * k / pieces);
-            self.integrate(l - done_l, r - done_r);
-            (done_l, done_r) = (l, r);
+        let most = self.piece_ticks as i32;
+        let (mut left, mut right) = (left as i32, right as i32);
+        loop {
+            let (l, r) = (left.clamp(-most, most), right.clamp(-most, most));
+            self.integrate(l, r);
+            (left, right) = (left - l, right - r);
+            if left == 0 && right == 0 {
+                return;
+            }
         }
     }
 

@@ -158,7 +158,7 @@ impl EscapeConfig {
 
     /// Whether every field is in its documented range.
     pub const fn is_valid(&self) -> bool {
-        use crate::config::in_range;
+        use crate::fixed::in_range;
         in_range(self.window_steps as i32, 2, WINDOW_CAPACITY as i32)
             && in_range(self.crumb_mm as i32, 20, 5_000)
             && self.revisit_mm < self.crumb_mm

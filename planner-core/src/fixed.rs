@@ -250,6 +250,11 @@ impl core::ops::Neg for Dir {
 /// Largest magnitude [`Dir::scaled`] accepts (`2^17 − 1`).
 pub const MAX_SCALED: i32 = (1 << 17) - 1;
 
+/// `lo ≤ v ≤ hi` (`RangeInclusive::contains` is not a `const fn`).
+pub(crate) const fn in_range(v: i32, lo: i32, hi: i32) -> bool {
+    lo <= v && v <= hi
+}
+
 /// `a · b` where one of them is Q14, rounded; `|a · b| < 2^31`.
 #[inline]
 pub const fn mul_q14(a: i32, b: i32) -> i32 {

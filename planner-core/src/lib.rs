@@ -68,7 +68,7 @@ pub mod ring;
 pub mod route;
 pub mod sensors;
 
-pub use command::{Command, Guard, Output, Status};
+pub use command::{BrokenRule, Command, Guard, Output, Status};
 pub use config::{Config, ConfigBuilder, ConfigError};
 pub use escape::{EscapeConfig, Verdict};
 pub use fixed::{Angle, Dir, Force, Point};
@@ -203,6 +203,8 @@ pub struct Planner {
     /// while the rover turns in place and stores no new point).
     kept_midpoint: Option<(i32, i32, Force)>,
     fold_back: sensors::FoldBackFilter,
+    /// Finds a sensor stuck at one count.
+    freeze: sensors::FreezeWatch,
     /// What the guard saw beside the way (the safety rule's blind flank).
     flank: command::Flank,
     /// The cycle's collision points, for pictures and reports (feature
@@ -244,6 +246,7 @@ impl Planner {
             escape: escape::Escape::new(),
             follow: follow::Follow::default(),
             fold_back: sensors::FoldBackFilter::default(),
+            freeze: sensors::FreezeWatch::default(),
             following: false,
             turn_side: 0,
             spun: false,
@@ -288,6 +291,7 @@ impl Planner {
         self.escape = escape::Escape::new();
         self.follow = follow::Follow::default();
         self.fold_back = sensors::FoldBackFilter::default();
+        self.freeze = sensors::FreezeWatch::default();
         self.following = false;
         self.turn_side = 0;
         self.spun = false;
@@ -380,7 +384,8 @@ impl Planner {
         #[cfg(feature = "report")]
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);
-        if readings.contains(&Reading::Implausible) {
+        let frozen = moved && self.freeze.frozen(raw, self.config.frozen_views);
+        if frozen || readings.contains(&Reading::Implausible) {
             return stop(Status::SensorFault);
         }
         let robot = pose.position;
@@ -860,11 +865,13 @@ mod tests {
         planner_with(EscapeConfig::default(), goal)
     }
 
-    /// The default planner with the escape `escape`.
+    /// The default planner with the escape `escape`, without the watch for
+    /// stuck sensors: the tests' counts are scripted, noise-free.
     fn planner_with(escape: EscapeConfig, goal: Point) -> Planner {
         Planner::new(
             ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
                 .escape(escape)
+                .frozen_after_views(0)
                 .build()
                 .unwrap(),
             goal,
@@ -1385,6 +1392,53 @@ mod tests {
         let out = p.step_raw(at(0, 0, 0), &[FAR, FAR, 5_000, FAR, FAR]);
         assert_eq!(out.status, Status::SensorFault);
         assert_eq!(out.command.step_mm, 0);
+    }
+
+    /// A count the same in eight views in a row, each after an advance, is
+    /// a stuck sensor: a stop with a fault. Views on one spot do not count,
+    /// and one count that changes starts the count again.
+    #[test]
+    fn a_sensor_stuck_while_the_rover_advances_is_a_fault() {
+        let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .build()
+            .unwrap();
+        let mut p = Planner::new(cfg, Point::new(30_000, 0));
+        let counts = |k: i16| {
+            let noisy = (60 + k % 3) as u16;
+            [noisy, noisy + 1, 57, noisy, noisy + 2]
+        };
+        // On the spot, any number of views.
+        for k in 0..20 {
+            let out = p.step_raw(at(0, 0, 0), &counts(k));
+            assert_eq!(out.status, Status::Moving, "view {k} on the spot");
+        }
+        // Advancing: the views after advances are compared with each
+        // other, and the eighth with one count is a fault.
+        for k in 1..=8 {
+            let out = p.step_raw(at(20 * k, 0, 0), &counts(k));
+            let want = if k < 8 {
+                Status::Moving
+            } else {
+                Status::SensorFault
+            };
+            assert_eq!(out.status, want, "view {k} after an advance");
+        }
+        // The sensor changes: trusted again.
+        let mut changed = counts(9);
+        changed[2] = 58;
+        assert_eq!(p.step_raw(at(200, 0, 0), &changed).status, Status::Moving);
+        // Off (noise-free sensors): never.
+        let off = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .frozen_after_views(0)
+            .build()
+            .unwrap();
+        let mut p = Planner::new(off, Point::new(30_000, 0));
+        for k in 1..=50 {
+            assert_eq!(
+                p.step_raw(at(20 * k, 0, 0), &counts(k)).status,
+                Status::Moving
+            );
+        }
     }
 
     #[test]

@@ -17,7 +17,7 @@
 //! | `P <x_mm> <y_mm> <heading_deg>` | set the odometry pose (when stopped) | `OK` |
 //! | `S` | stop now (motors off) | `OK` |
 //! | `M` | report memory (the AVR; the STM32 answers `ERR`) | `M stack_peak=<bytes>` |
-//! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below (the AVR; the STM32's emulated build replays a trace built in) | `OK` |
+//! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below (the AVR's `replay` binary, which the emulator tests run; the STM32's emulated build replays a trace built in) | `OK` |
 //! | `D` | the sensors now: their raw counts, and what the planner reads from them | `D <c0> … <c4> <r0> … <r4>` |
 //!
 //! `D` is for bringing a rover up: the five sensors in the pin map's order

@@ -424,6 +424,56 @@ impl Reading {
 /// One reading per sensor, in sensor order.
 pub type Readings = [Reading; SENSOR_COUNT];
 
+/// Ours: finds a sensor stuck at one count, frozen or stuck at the
+/// "nothing in range" level, which reads as plausible and wrong. A working
+/// sensor's count changes from one view to the next while the rover moves,
+/// by its noise if by nothing else: the Sharp's output ripples by about
+/// 10 mV, two counts of the AVR's ADC and a dozen of the STM32's, so one
+/// count seen again has a chance of about one in seven on the AVR. A count
+/// the same in [`crate::ConfigBuilder::frozen_after_views`] views in a row,
+/// each after an advance (so that the sensor has put out new values in
+/// between), is a sensor that no longer looks.
+///
+/// It compares the views after advances only, each with the one after the
+/// advance before (the views on the spot between them cost nothing), and
+/// keeps one streak for all sensors, not one count each: the sensors that
+/// repeated at the streak's first view, less each that has changed since.
+/// A sensor that starts to repeat during another's streak is counted from
+/// the next streak: found later, never wrongly.
+#[derive(Clone, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct FreezeWatch {
+    /// The counts of the last view after an advance.
+    last: RawCounts,
+    /// Bit `i`: sensor `i` has repeated its count in every view of the
+    /// streak.
+    suspects: u8,
+    /// Views in the streak.
+    views: u8,
+}
+
+impl FreezeWatch {
+    /// Take the counts of a view after an advance: whether a sensor's count
+    /// has now been the same in `views` such views in a row (never for
+    /// `views` 0).
+    pub fn frozen(&mut self, raw: &RawCounts, views: u8) -> bool {
+        let mut same = 0;
+        for (i, (&c, last)) in raw.iter().zip(self.last.iter_mut()).enumerate() {
+            if c == *last {
+                same |= 1 << i;
+            }
+            *last = c;
+        }
+        self.suspects &= same;
+        if self.suspects == 0 {
+            self.suspects = same;
+            self.views = 1;
+        }
+        self.views = self.views.saturating_add(1);
+        views > 0 && self.suspects != 0 && self.views >= views
+    }
+}
+
 /// Distrusts a reading that jumps from very near to far in one cycle: that
 /// is what an object entering the fold-back region looks like. The jump is
 /// read as "too close" for that one cycle (the planner turns away rather

@@ -1,6 +1,6 @@
 //! Property tests of the planner's invariants over any input.
 
-use planner_core::command::{free_distance_mm, guard};
+use planner_core::command::guard;
 use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY, STALE_MS};
 use planner_core::route::{RouteConfig, RouteMap, RoutePlanner};
 use planner_core::{
@@ -21,30 +21,15 @@ fn counts() -> impl Strategy<Value = u16> {
     prop_oneof![12 => 0u16..700, 1 => any::<u16>()]
 }
 
-/// The step is within [0, range]; the safety rule holds for the readings
-/// it was planned from (none implausible); a heading outside the sensed
-/// sector is a pure turn; stops have a zero step.
+/// The step keeps the rules of [`Output::broken_rule`] for the readings it
+/// was planned from.
 fn step_keeps_the_rules(
     cfg: &Config,
     readings: &Readings,
     pose: Pose,
     out: Output,
 ) -> Result<(), TestCaseError> {
-    let step = out.command.step_mm;
-    prop_assert!(step <= cfg.sensor_range_mm());
-    let rel = out.command.heading.sub(pose.heading);
-    if rel.abs_signed() > cfg.sector_half_width().0 {
-        prop_assert_eq!(step, 0);
-    }
-    if step > 0 {
-        prop_assert_eq!(out.status, Status::Moving);
-        let free = free_distance_mm(cfg, readings, rel);
-        prop_assert!(step <= free, "step {} > free {}", step, free);
-        prop_assert!(!readings.contains(&Reading::Implausible));
-    }
-    if out.status != Status::Moving {
-        prop_assert_eq!(step, 0);
-    }
+    prop_assert_eq!(out.broken_rule(cfg, readings, pose), None, "{:?}", out);
     Ok(())
 }
 

@@ -24,4 +24,5 @@ pub mod scenario;
 pub mod sensor;
 pub mod sim;
 pub mod svg;
+pub mod units;
 pub mod world;

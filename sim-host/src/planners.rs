@@ -5,13 +5,13 @@
 use crate::geom::V2;
 use crate::routemap::{self, ROUTE_EDGES, ROUTE_NODES};
 use crate::scenario::Scenario;
+use crate::units::{to_angle, to_mm, to_point, to_rad, to_v2};
 use planner_core::apf::{ApfConfig, ApfPlanner};
-use planner_core::fixed::Point;
 use planner_core::peers::freespace::FreeSpace;
 use planner_core::peers::{Bug2, TangentBug, Vfh};
 use planner_core::route::{RouteConfig, RoutePlanner};
 use planner_core::{
-    AdcProfile, Angle, ConfigBuilder, EscapeConfig, Navigator, Planner, Pose, RawCounts, Status,
+    AdcProfile, ConfigBuilder, EscapeConfig, Navigator, Planner, Pose, RawCounts, Status,
 };
 
 /// Planner names for `--planner`.
@@ -85,32 +85,6 @@ pub struct SimCommand {
     pub status: Status,
 }
 
-/// Metres to the core's millimetres.
-pub fn to_point(p: V2) -> Point {
-    Point::saturating((p.x * 1000.0).round() as i32, (p.y * 1000.0).round() as i32)
-}
-
-/// Metres to the core's whole millimetres, saturating at 0 and `u16::MAX`.
-pub fn to_mm(m: f64) -> u16 {
-    (m * 1000.0).round().clamp(0.0, u16::MAX as f64) as u16
-}
-
-/// The core's millimetres to metres.
-pub fn to_v2(p: Point) -> V2 {
-    V2::new(p.x as f64 / 1000.0, p.y as f64 / 1000.0)
-}
-
-/// Radians to the core's binary angle.
-pub fn to_angle(rad: f64) -> Angle {
-    let turns = rad / std::f64::consts::TAU;
-    Angle(((turns.rem_euclid(1.0) * 65_536.0).round() as u32 & 0xFFFF) as u16)
-}
-
-/// The core's binary angle to radians in (−π, π].
-pub fn to_rad(a: Angle) -> f64 {
-    a.signed() as f64 * std::f64::consts::TAU / 65_536.0
-}
-
 /// What a run leaves to draw: remembered points, the midpoint of the
 /// active ones, virtual obstacles (centre, radius), virtual obstacles dropped.
 pub type Diagnostics = (Vec<V2>, Option<V2>, Vec<(V2, f64)>, usize);
@@ -144,16 +118,28 @@ pub struct SimPlanner {
 
 impl SimPlanner {
     /// The planner `kind` for scenario `sc`, sensors on an `adc`, on the
-    /// rim or `set_back` behind it.
-    pub fn new(kind: PlannerKind, sc: &Scenario, adc: AdcProfile, set_back: bool) -> SimPlanner {
+    /// rim or `set_back` behind it, `noisy` or not
+    /// ([`crate::sensor::SensorMode::noisy`]:
+    /// the watch for stuck sensors is off without noise).
+    pub fn new(
+        kind: PlannerKind,
+        sc: &Scenario,
+        adc: AdcProfile,
+        set_back: bool,
+        noisy: bool,
+    ) -> SimPlanner {
         let escape = escape_config(kind);
         let radius_mm = (sc.robot_radius * 1000.0).round().clamp(20.0, 1000.0) as u16;
-        let cfg = ConfigBuilder::new(adc)
-            .robot_radius_mm(radius_mm)
-            .escape(escape)
-            .sensors_set_back(set_back)
-            .build()
-            .expect("the default configuration with a validated scenario radius is valid");
+        let builder = ConfigBuilder::new(adc);
+        let cfg = match noisy {
+            true => builder,
+            false => builder.frozen_after_views(0),
+        }
+        .robot_radius_mm(radius_mm)
+        .escape(escape)
+        .sensors_set_back(set_back)
+        .build()
+        .expect("the default configuration with a validated scenario radius is valid");
         let goal = to_point(V2::new(sc.goal[0], sc.goal[1]));
         let core = match kind {
             PlannerKind::Apf => {
@@ -355,7 +341,7 @@ mod tests {
                     PlannerKind::Bug2,
                 ] {
                     for set_back in [false, true] {
-                        let p = SimPlanner::new(kind, &sc, adc, set_back);
+                        let p = SimPlanner::new(kind, &sc, adc, set_back, true);
                         let want = mm.clamp(20, 1_000) as u16;
                         assert_eq!(p.config().robot_radius_mm(), want, "{mm} mm");
                     }

@@ -29,8 +29,8 @@
 //! 5 mm to spare (a narrower strip no rover hits).
 
 use crate::geom::V2;
-use crate::planners::{to_mm, to_point, to_v2};
 use crate::scenario::Scenario;
+use crate::units::{to_mm, to_point, to_v2};
 use crate::world::World;
 use planner_core::route::RouteMap;
 use std::collections::HashMap;

@@ -36,6 +36,13 @@ pub enum SensorMode {
 }
 
 impl SensorMode {
+    /// Whether a reading carries noise: a noise-free sensor's count is the
+    /// same whenever its distance is, which the planner's watch for stuck
+    /// sensors must not take for a fault.
+    pub fn noisy(&self) -> bool {
+        matches!(self, SensorMode::Realistic { noise_v, .. } if *noise_v > 0.0)
+    }
+
     /// The default realistic model: 10 mV noise, ±5 % unit spread.
     pub const REALISTIC: SensorMode = SensorMode::Realistic {
         noise_v: 0.010,

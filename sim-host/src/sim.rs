@@ -8,9 +8,10 @@
 
 use crate::fault::{Fault, Faults};
 use crate::geom::V2;
-use crate::planners::{to_point, to_rad, to_v2, PlannerKind, SimPlanner};
+use crate::planners::{PlannerKind, SimPlanner};
 use crate::scenario::Scenario;
 use crate::sensor::{SensorMode, VirtualSensors};
+use crate::units::{to_point, to_rad, to_v2};
 use crate::world::World;
 use planner_core::{AdcProfile, Status};
 use rand::SeedableRng;
@@ -376,7 +377,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     let world = World::from_scenario(sc);
     let r = sc.robot_radius;
     let goal = V2::new(sc.goal[0], sc.goal[1]);
-    let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc, cfg.set_back);
+    let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc, cfg.set_back, cfg.sensors.noisy());
     let angles = planner.sensor_angles_rad();
     let mut sensors = VirtualSensors::new(
         cfg.adc,

@@ -14,8 +14,8 @@ pub const F_CPU: u32 = 16_000_000;
 static BUILT: Mutex<Vec<(String, PathBuf)>> = Mutex::new(Vec::new());
 
 /// Build one binary of firmware-avr (release) with `features` once per
-/// process. With the `set-back` feature in its own target folder, so that
-/// the two builds of one binary do not overwrite each other's ELF.
+/// process. Each set of features has its own target folder, so that the
+/// builds of one binary do not overwrite each other's ELF.
 fn build(bin: &'static str, features: &[&str]) -> PathBuf {
     let key = format!("{bin} {}", features.join(","));
     let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
@@ -23,14 +23,13 @@ fn build(bin: &'static str, features: &[&str]) -> PathBuf {
         return p.clone();
     }
     let dir = repo_root().join("firmware-avr");
-    let target = if features.contains(&"set-back") {
-        "target/set-back"
-    } else {
-        "target"
+    let target = match features {
+        [] => "target".to_string(),
+        f => format!("target/{}", f.join("+")),
     };
     let mut cmd = clean_cargo(&dir);
     cmd.args(["build", "--release", "--quiet", "--bin", bin]);
-    cmd.args(["--target-dir", target]);
+    cmd.args(["--target-dir", &target]);
     if !features.is_empty() {
         cmd.args(["--features", &features.join(",")]);
     }
@@ -41,15 +40,26 @@ fn build(bin: &'static str, features: &[&str]) -> PathBuf {
     elf
 }
 
-/// The firmware (release build); the ELF path.
+/// The firmware's production image (release build); the ELF path.
 pub fn firmware_elf() -> PathBuf {
     build("firmware-avr", &[])
 }
 
-/// The firmware built for sensors set back from the rim (its `set-back`
-/// feature).
+/// The `replay` binary: the firmware's planner behind the replay protocol,
+/// what the tests replay recorded traces through and time.
+pub fn replay_firmware_elf() -> PathBuf {
+    build("replay", &[])
+}
+
+/// The production image for sensors set back from the rim (its
+/// `set-back` feature).
 pub fn set_back_firmware_elf() -> PathBuf {
     build("firmware-avr", &["set-back"])
+}
+
+/// The `replay` binary for sensors set back.
+pub fn set_back_replay_firmware_elf() -> PathBuf {
+    build("replay", &["set-back"])
 }
 
 /// The `costs` bench: the step's parts timed on fixed inputs.
@@ -91,9 +101,14 @@ pub struct Avr {
 }
 
 impl Avr {
-    /// Boot the firmware and wait for its `READY` line.
+    /// Boot the production firmware and wait for its `READY` line.
     pub fn boot() -> Avr {
         Avr::boot_elf(&firmware_elf())
+    }
+
+    /// Boot the `replay` binary.
+    pub fn boot_replay() -> Avr {
+        Avr::boot_elf(&replay_firmware_elf())
     }
 
     /// Boot an ELF that greets with `READY` (the firmware or a bench).

@@ -7,7 +7,7 @@
 /// The parts, in the order [`parts`] gives them.
 pub const PARTS: [&str; 9] = [
     "planner-core's functions",
-    "the planner step, inlined into firmware_avr::timed_step",
+    "the planner step, inlined into firmware_avr::timed::step",
     "the firmware's main loop (executor, odometry, protocol, telemetry inlined)",
     "the configuration, in program memory",
     "the firmware's drivers and replay mode",
@@ -21,7 +21,7 @@ pub const PARTS: [&str; 9] = [
 /// one of [`PARTS`]. A generic function of `core` or `heapless` made for
 /// the planner's types counts as the planner's (it is there because of it).
 pub fn part_of(name: &str) -> &'static str {
-    let i = if name == "firmware_avr::timed_step" {
+    let i = if name == "firmware_avr::timed::step" {
         1
     } else if name.starts_with("firmware_avr::__avr_device_rt_main") {
         2
@@ -95,7 +95,7 @@ mod tests {
     #[test]
     fn symbols_go_to_their_parts() {
         let cases = [
-            ("firmware_avr::timed_step", 1),
+            ("firmware_avr::timed::step", 1),
             ("firmware_avr::__avr_device_rt_main", 2),
             ("firmware_avr::progmem::CONFIG::VALUE", 3),
             ("__vector_21", 6),
@@ -149,7 +149,7 @@ mod tests {
             (4, "<planner_core::escape::Escape>::force"),
             (9, "planner_core::fixed::isqrt"),
             (3, "planner_core::escape::reach_mm"),
-            (50, "firmware_avr::timed_step"),
+            (50, "firmware_avr::timed::step"),
         ]
         .iter()
         .map(|&(size, name)| (0, size, name.to_string()))

@@ -15,9 +15,9 @@ pub mod stm32_profile;
 
 use planner_core::{AdcProfile, ConfigBuilder, Guard, Output, Planner, Point, Pose, RawCounts};
 use sim_host::geom::V2;
-use sim_host::planners::{to_angle, to_point, to_rad};
 use sim_host::scenario::Scenario;
 use sim_host::sensor::{SensorMode, VirtualSensors};
+use sim_host::units::{to_angle, to_point, to_rad};
 use sim_host::world::World;
 use std::path::{Path, PathBuf};
 

@@ -3,7 +3,7 @@
 //!
 //! Replays traces through the firmware in simavr one instruction at a
 //! time and charges each instruction's cycles to its address while a
-//! planner step runs (from the entry of `timed_step` until it returns),
+//! planner step runs (from the entry of `timed::step` until it returns),
 //! and to the function the step's own code called it under (a shadow call
 //! stack kept from the `call`/`rcall`/`icall`, `ret`/`reti` instructions
 //! and interrupt entries).
@@ -342,7 +342,7 @@ pub struct Profile {
     /// replay order.
     pub step_cycles: Vec<u32>,
     /// Each step's cycles as the profiler counted them (the whole call of
-    /// `timed_step`), in replay order.
+    /// `timed::step`), in replay order.
     pub step_counted: Vec<u64>,
     /// Cycles by function the instructions are in.
     pub by_function: Vec<(String, u64)>,
@@ -379,8 +379,8 @@ pub const OWN_CODE: &str = "(the step's own code: step_raw and what is inlined)"
 pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     let syms = Symbols::of(elf);
     let entry = syms
-        .entry_of("firmware_avr::timed_step")
-        .unwrap_or_else(|| panic!("no timed_step in {elf:?}"));
+        .entry_of("replay::timed::step")
+        .unwrap_or_else(|| panic!("no timed::step in {elf:?}"));
     let arith = ["__mulsi3", "__udivmodsi4"].map(|f| {
         syms.entry_of(f)
             .unwrap_or_else(|| panic!("no {f} in {elf:?}"))

@@ -4,7 +4,7 @@
 //! the operands of every 32-bit multiply and division read.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{firmware_elf, Avr};
+use rover_tests::avr::{replay_firmware_elf, Avr};
 use rover_tests::profile::{profile, OWN_CODE};
 use rover_tests::{at_new_position, standard_traces};
 
@@ -12,7 +12,7 @@ use rover_tests::{at_new_position, standard_traces};
 fn the_profile_accounts_for_the_timed_steps() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
     let frames: usize = traces.iter().map(|t| t.frames.len()).sum();
-    let p = profile(&firmware_elf(), &traces);
+    let p = profile(&replay_firmware_elf(), &traces);
     assert_eq!(p.steps as usize, frames, "one profiled step per frame");
     assert_eq!(p.step_cycles.len(), frames, "one timed step per frame");
     assert_eq!(p.mismatches, 0, "the firmware's commands are the host's");
@@ -124,8 +124,8 @@ fn the_profile_accounts_for_the_timed_steps() {
 #[test]
 fn both_harnesses_time_every_step_alike() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
-    let p = profile(&firmware_elf(), &traces);
-    let mut avr = Avr::boot();
+    let p = profile(&replay_firmware_elf(), &traces);
+    let mut avr = Avr::boot_replay();
     let report: Vec<u32> = traces
         .iter()
         .flat_map(|t| avr.replay(t.goal, &t.frames))

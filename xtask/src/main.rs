@@ -3,7 +3,8 @@
 //! stm32-report` print the firmware figures, `cargo xtask avr-profile` and
 //! `cargo xtask stm32-profile` where the AVR step spends its cycles and the
 //! STM32 step its instructions; `cargo xtask results` writes
-//! `docs/results.md`, every planner on every set of worlds.
+//! `docs/results.md`, every planner on every set of worlds; `cargo xtask
+//! fuzz` runs the fuzz targets for long (`ci` runs each briefly).
 //!
 //! `ci` installs what it needs on a fresh Debian machine of the project's
 //! kind: rustup targets and components always, Debian packages when it runs
@@ -126,6 +127,15 @@ fn ensure_tools() {
             &[],
         );
     }
+    // cargo-fuzz runs the fuzz targets (fuzz/).
+    if output("cargo", &["fuzz", "--version"]).is_empty() {
+        run(
+            &dir,
+            "cargo",
+            &["+stable", "install", "--locked", "cargo-fuzz"],
+            &[],
+        );
+    }
     // defmt-print decodes the emulated STM32 firmware's log.
     if output("defmt-print", &["--version"]).is_empty() {
         run(
@@ -223,7 +233,7 @@ fn ci() {
         ],
         &[],
     );
-    for fw in ["firmware-avr", "firmware-stm32"] {
+    for fw in ["firmware-avr", "firmware-stm32", "fuzz"] {
         let manifest = format!("{fw}/Cargo.toml");
         if dir.join(&manifest).exists() {
             run(
@@ -251,7 +261,23 @@ fn ci() {
     // firmware themselves).
     run(&dir, "cargo", &["+stable", "test", "--workspace"], &[]);
     cross_builds();
+    // Each fuzz target for a short, fixed number of inputs: a smoke test.
+    fuzz(&["-runs=20000"]);
     eprintln!("\nxtask ci: all checks passed");
+}
+
+/// The cargo-fuzz targets in `fuzz/` (nightly, with the address sanitizer).
+const FUZZ_TARGETS: [&str; 3] = ["planner_step", "line_reader", "scenario"];
+
+/// Every fuzz target in turn with libFuzzer's `options`; each prints
+/// `Done N runs in S second(s)` and stops at the first failure, which it
+/// writes to `fuzz/artifacts/<target>/`.
+fn fuzz(options: &[&str]) {
+    for target in FUZZ_TARGETS {
+        let mut args = vec!["+nightly", "fuzz", "run", target, "--"];
+        args.extend_from_slice(options);
+        run(&root(), "cargo", &args, &[]);
+    }
 }
 
 /// `cargo run --release -p PACKAGE ARGS…` with the arguments after the
@@ -288,9 +314,18 @@ fn main() {
         "results" => results(),
         "faults" => cargo_run(&["-p", "sim-host", "--", "faults"]),
         "failures" => cargo_run(&["-p", "sim-host", "--", "failures"]),
+        "fuzz" => {
+            // Ten minutes a target unless told otherwise (libFuzzer options).
+            let options: Vec<String> = std::env::args().skip(2).collect();
+            let options: Vec<&str> = match options.is_empty() {
+                true => vec!["-max_total_time=600"],
+                false => options.iter().map(String::as_str).collect(),
+            };
+            fuzz(&options);
+        }
         _ => {
             eprintln!(
-                "usage: cargo xtask <ci|cross|results|faults|failures|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
+                "usage: cargo xtask <ci|cross|results|faults|failures|fuzz|avr-report|stm32-report|avr-profile|avr-size|stm32-profile>"
             );
             eprintln!(
                 "  ci     every check: fmt, clippy, tests, cross builds (installs what it needs)"
@@ -299,6 +334,7 @@ fn main() {
             eprintln!("  results       write docs/results.md: every planner on every set (sim-host results)");
             eprintln!("  faults        write docs/faults.md: eapf under each fault on every still set (sim-host faults)");
             eprintln!("  failures      write docs/failures.md: each world eapf fails, with its replay (sim-host failures)");
+            eprintln!("  fuzz          each fuzz target for ten minutes (or the libFuzzer options given, e.g. -runs=1000000)");
             eprintln!("  avr-report    firmware-avr size and step cycles (simavr)");
             eprintln!("  stm32-report  firmware-stm32 size and step instructions (QEMU)");
             eprintln!("  avr-profile   where firmware-avr's step spends its cycles (simavr)");

@@ -3,7 +3,7 @@
 //! avr-report`); see [`rover_tests::profile`].
 
 use planner_core::AdcProfile;
-use rover_tests::avr::firmware_elf;
+use rover_tests::avr::replay_firmware_elf;
 use rover_tests::profile::profile;
 use rover_tests::{
     at_new_position, print_by_bounds, print_by_position, print_table, standard_traces,
@@ -11,7 +11,7 @@ use rover_tests::{
 
 fn main() {
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
-    let p = profile(&firmware_elf(), &traces);
+    let p = profile(&replay_firmware_elf(), &traces);
     let steps = p.steps.max(1);
     println!(
         "avr profile: {} steps, {} cycles per step (the firmware timed {} per step)",

@@ -9,7 +9,7 @@ use rover_tests::{mean_worst, standard_traces};
 fn main() {
     let (text, data, bss) = elf_size(&firmware_elf());
     let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
-    let mut avr = Avr::boot();
+    let mut avr = Avr::boot_replay();
     let mut cycles = Vec::new();
     let mut mismatches = 0;
     for t in &traces {
