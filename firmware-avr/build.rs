@@ -3,13 +3,10 @@
 //!
 //! compiler-builtins defines `__divmodsi4` / `__udivmodsi4` for AVR as weak
 //! symbols around a generic Rust long division (about 1,575 cycles per i32
-//! division, measured in simavr); with libgcc's hand-written AVR versions the
-//! planner's worst step went from 75,450 to 62,667 cycles (`cargo xtask
-//! avr-report`). Its `memcpy` / `memmove` / `memset` are weak too, and
-//! word-at-a-time loops written for wider machines; avr-libc's byte loops in
-//! assembly copy the planner's small structs (readings, point lists) faster
-//! and are smaller: mean step 31,201 to 30,362 cycles, text 28,074 to
-//! 26,956 bytes, measured the same way.
+//! division, `avr_costs`). Its `memcpy` / `memmove` / `memset` are weak
+//! too, and word-at-a-time loops written for wider machines; avr-libc's
+//! byte loops in assembly copy the planner's small structs (readings, point
+//! lists) faster and are smaller (docs/performance.md).
 //! An archive member is only pulled in for an undefined symbol, and the weak
 //! ones are already defined, so the object files (with `__negsi2`, which
 //! `__divmodsi4` calls) are extracted and passed to the linker directly;

@@ -7,7 +7,7 @@
 use crate::board::{steal, Dp};
 use avr_device::interrupt::{self, Mutex};
 use core::cell::Cell;
-use planner_core::sensors::SENSOR_WARMUP_MS;
+use planner_core::eapf::sensors::SENSOR_WARMUP_MS;
 use planner_core::{IrSensors, RawCounts, SENSOR_COUNT};
 
 /// Latest counts per channel, and how many full sweeps have completed.

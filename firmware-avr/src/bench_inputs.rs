@@ -2,7 +2,7 @@
 //! needs and the bench does not print: this one file is compiled into both
 //! (`#[path]`), so that the two cannot drift apart.
 
-use planner_core::escape::{Escape, EscapeConfig};
+use planner_core::eapf::escape::{Escape, EscapeConfig};
 use planner_core::{Point, Reading};
 
 /// Readings for the free-distance rule with obstacles in sight.

@@ -4,7 +4,7 @@
 //! IR sensors sampled in the background, wheel-encoder odometry, the
 //! turn-then-advance executor and the EAPF planner of `planner-core`, a
 //! text protocol on the serial port, and a watchdog. Pin map in [`board`],
-//! serial protocol in `planner_core::protocol`.
+//! serial protocol in `planner_core::rover::protocol`.
 //!
 //! Board code is a thin register-level layer on `avr-device` (avr-hal is not
 //! on crates.io): one module per peripheral. Everything the rover decides is
@@ -24,8 +24,8 @@ mod serial;
 mod stack;
 mod timed;
 
-use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::protocol::{self, Request, SensorField};
+use planner_core::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use planner_core::rover::protocol::{self, Request, SensorField};
 use planner_core::{Angle, Config, Guard, IrSensors, Planner, Point, Pose, Status};
 use serial::Serial;
 use ufmt::{uwrite, uwriteln};

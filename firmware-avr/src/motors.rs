@@ -5,7 +5,7 @@
 
 use crate::board::Dp;
 use crate::encoders;
-use planner_core::drive::Wheels;
+use planner_core::rover::drive::Wheels;
 
 const COM0A1: u8 = 1 << 7;
 const COM0B1: u8 = 1 << 5;

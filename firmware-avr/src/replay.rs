@@ -1,4 +1,4 @@
-//! Replay mode's frame loop (protocol in `planner_core::protocol`): read
+//! Replay mode's frame loop (protocol in `planner_core::rover::protocol`): read
 //! the guard's samples and run the guard on each, read pose and raw counts,
 //! run a timed planner step, answer with the command, status, cycle count,
 //! the guard's verdicts and its costliest look's cycles, until a frame

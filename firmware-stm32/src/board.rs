@@ -8,7 +8,7 @@
 //! | PB14, PB15 | right motor direction → BIN1, BIN2 |
 //! | PB6, PB7 | left wheel encoder A, B (TIM4 encoder mode) |
 //! | PA15, PB3 | right wheel encoder A, B (TIM2 encoder mode) |
-//! | PA9, PA10 | USART1 TX, RX: 115,200 8N1, the command lines of `planner_core::protocol` |
+//! | PA9, PA10 | USART1 TX, RX: 115,200 8N1, the command lines of `planner_core::rover::protocol` |
 //! | SWDIO, SWCLK | probe-rs: flashing and defmt logs over RTT |
 //!
 //! The GP2Y0A21 outputs up to 3.1 V: within the 3.3 V ADC range, no divider.
@@ -23,9 +23,9 @@ use cortex_m::peripheral::syst::SystClkSource;
 use defmt_rtt as _;
 use micromath::F32Ext;
 use panic_probe as _;
-use planner_core::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::protocol::{self, Request};
-use planner_core::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
+use planner_core::eapf::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
+use planner_core::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use planner_core::rover::protocol::{self, Request};
 use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
 use stm32f4xx_hal::qei::Qei;

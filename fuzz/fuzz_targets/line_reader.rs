@@ -4,7 +4,7 @@
 #![no_main]
 
 use libfuzzer_sys::fuzz_target;
-use planner_core::protocol::LineReader;
+use planner_core::rover::protocol::LineReader;
 
 fuzz_target!(|bytes: Vec<(u8, u16)>| {
     let mut reader = LineReader::new();

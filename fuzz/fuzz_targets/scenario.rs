@@ -5,11 +5,10 @@
 
 use libfuzzer_sys::fuzz_target;
 use sim_host::scenario::Scenario;
-use sim_host::world::World;
 use std::path::Path;
 
 fuzz_target!(|text: &str| {
     if let Ok(sc) = Scenario::parse(text, Path::new("fuzz.toml")) {
-        let _ = World::from_scenario(&sc);
+        let _ = sc.world();
     }
 });

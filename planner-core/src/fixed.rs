@@ -174,10 +174,9 @@ pub struct Dir {
 }
 
 /// A [`Dir`] component: 16 bits on the AVR, where every direction passed,
-/// kept or spilled is then half the bytes (`cargo xtask avr-report`: mean
-/// step 15,259 → 14,718 cycles, text −632 bytes); 32 elsewhere, where a
-/// 16-bit value costs a sign extension at each use (the STM32's worst step
-/// was 84 instructions longer so). The values are the same either way.
+/// kept or spilled is then half the bytes; 32 elsewhere, where a 16-bit
+/// value costs a sign extension at each use. The values are the same
+/// either way (docs/performance.md).
 #[cfg(target_arch = "avr")]
 pub type Q14 = i16;
 /// A [`Dir`] component (see the AVR's definition).
@@ -225,8 +224,7 @@ impl Dir {
 
     /// [`Dir::scaled`] for a caller that has bounded the magnitude within
     /// ±[`MAX_SCALED`]: no clamp. Every caller in the crate has (each says
-    /// how); on the AVR the clamp's two 32-bit compares per call were 83
-    /// cycles of the mean step (`cargo xtask avr-report`).
+    /// how); on the AVR the clamp is two 32-bit compares per call.
     pub(crate) fn scaled_bounded(self, magnitude: i32) -> (i32, i32) {
         (
             mul_q14(self.cos(), magnitude),
@@ -365,8 +363,7 @@ pub fn sat_u16(v: i32) -> u16 {
 /// from a power-of-two start replace sixteen).
 pub fn isqrt(v: u32) -> u16 {
     // Below 2^16 (the free-distance rule's half chords, always) the same
-    // steps in 16 bits: on the AVR half the instructions (`cargo xtask
-    // avr-report`: worst step 30,358 → 29,755 cycles).
+    // steps in 16 bits: on the AVR half the instructions.
     #[cfg(target_arch = "avr")]
     return match u16::try_from(v) {
         Ok(v) => isqrt_bitwise16(v) as u16,
@@ -377,9 +374,8 @@ pub fn isqrt(v: u32) -> u16 {
 }
 
 /// `floor(√v)` bit by bit, shifts and subtractions only, in the width of
-/// `$t` (`$root` holds the root). One text for both widths: written as a
-/// generic function over the operator traits, LLVM's AVR code was slower
-/// (`cargo xtask avr-report`: worst step 29,755 → 30,009 cycles).
+/// `$t` (`$root` holds the root). One text for both widths: a generic
+/// function over the operator traits gives slower AVR code.
 macro_rules! isqrt_bitwise {
     ($(#[$doc:meta])* $name:ident, $t:ty, $root:ty, $start:expr) => {
         $(#[$doc])*
@@ -512,8 +508,7 @@ impl Force {
     /// [`Force::plus`] would not saturate: the same value as either sum,
     /// by the cheaper one on each target. On the AVR the plain add (a
     /// saturating one is ~50 cycles a component); elsewhere the saturating
-    /// one (with the plain add the STM32's worst step was 30 instructions
-    /// longer, `cargo xtask stm32-report`).
+    /// one, which the Cortex-M4 does in one instruction.
     pub fn plus_unsaturated(self, other: Force) -> Force {
         if cfg!(target_arch = "avr") {
             self.plus_bounded(other)
@@ -562,6 +557,16 @@ pub fn inverse_square_force(d_mm: u16) -> i32 {
     let d = d_mm.max(91) as u32;
     // 10^6 mm² · 1024 = 1.024e9 fits in u32.
     (1_024_000_000u32 / (d * d)) as i32
+}
+
+/// The rover's pose from odometry.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub struct Pose {
+    /// Position, world mm.
+    pub position: Point,
+    /// Heading, world frame.
+    pub heading: Angle,
 }
 
 #[cfg(test)]

@@ -1,8 +1,8 @@
 //! Property tests of the planner's invariants over any input.
 
-use planner_core::command::guard;
-use planner_core::protocol::{parse, LineReader, Request, LINE_CAPACITY, STALE_MS};
-use planner_core::route::{RouteConfig, RouteMap, RoutePlanner};
+use planner_core::eapf::command::guard;
+use planner_core::maps::route::{RouteConfig, RouteMap, RoutePlanner};
+use planner_core::rover::protocol::{parse, LineReader, Request, LINE_CAPACITY, STALE_MS};
 use planner_core::{
     AdcProfile, Angle, Config, ConfigBuilder, EscapeConfig, Guard, Output, Planner, Point, Pose,
     RawCounts, Reading, Readings, Status,

@@ -739,7 +739,7 @@ mod tests {
     /// Nothing of `sc` within `robot_radius + KEEP_CLEAR_M` of `p` (what
     /// the generators keep clear round the start and the goal).
     fn assert_kept_clear(sc: &Scenario, p: [f64; 2], seed: u64) {
-        let w = crate::world::World::from_scenario(sc);
+        let w = sc.world();
         let clear = w.clearance(crate::geom::V2::new(p[0], p[1]), 0.0);
         assert!(
             clear > sc.robot_radius + KEEP_CLEAR_M - 1e-9,

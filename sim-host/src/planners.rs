@@ -6,10 +6,10 @@ use crate::geom::V2;
 use crate::routemap::{self, ROUTE_EDGES, ROUTE_NODES};
 use crate::scenario::Scenario;
 use crate::units::{to_angle, to_mm, to_point, to_rad, to_v2};
-use planner_core::apf::{ApfConfig, ApfPlanner};
+use planner_core::maps::route::{RouteConfig, RoutePlanner};
+use planner_core::peers::apf::{ApfConfig, ApfPlanner};
 use planner_core::peers::freespace::FreeSpace;
 use planner_core::peers::{Bug2, TangentBug, Vfh};
-use planner_core::route::{RouteConfig, RoutePlanner};
 use planner_core::{
     AdcProfile, ConfigBuilder, EscapeConfig, Navigator, Planner, Pose, RawCounts, Status,
 };
@@ -296,7 +296,7 @@ impl SimPlanner {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use planner_core::escape;
+    use planner_core::eapf::escape;
 
     #[test]
     fn each_sensing_planner_gets_its_escape() {

@@ -48,7 +48,7 @@ pub fn with_margin(sc: &Scenario, margin_mm: u16) -> Option<Reference> {
 /// The shortest path for the scenario's robot at time zero, ignoring moving
 /// obstacles; `None` when the grid finds no path.
 pub fn shortest_path(sc: &Scenario) -> Option<Reference> {
-    let world = World::from_scenario(sc);
+    let world = sc.world();
     let r = sc.robot_radius;
     let h = RESOLUTION_M;
     let [x0, y0, x1, y1] = sc.bounds;

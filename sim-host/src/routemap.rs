@@ -1,5 +1,5 @@
 //! The waypoint graph the `route` planner plans over (planner-core's
-//! [`route`](planner_core::route) layer): built here from the scenario's
+//! [`route`](planner_core::maps::route) layer): built here from the scenario's
 //! known map, because the world's geometry lives here; the planning and the
 //! following are the core's.
 //!
@@ -32,7 +32,7 @@ use crate::geom::V2;
 use crate::scenario::Scenario;
 use crate::units::{to_mm, to_point, to_v2};
 use crate::world::World;
-use planner_core::route::RouteMap;
+use planner_core::maps::route::RouteMap;
 use std::collections::HashMap;
 
 /// Node capacity of the simulator's maps.
@@ -60,9 +60,8 @@ const GAP_REFINE_M: f64 = 0.005;
 /// A gap the refining search finds must have this much to spare beyond
 /// the need, m: a strip of centre positions at least two search steps
 /// wide. Narrower ones are there in random worlds (gen-126: 1.9 mm to
-/// spare between two circles) and no rover hits them: the route layer
-/// sent the rover into one, it turned about at the mouth until the leg's
-/// budget ran out, and the path was 4.0× the reference instead of 2.0×.
+/// spare between two circles) and no rover hits them: sent into one, the
+/// rover turns about at its mouth until the leg's budget runs out.
 const GAP_MIN_SPARE_M: f64 = 0.005;
 
 /// Gap nodes are where the clearance is at most this much above the need,
@@ -96,7 +95,7 @@ pub const PREFERRED_MARGIN_M: f64 = 0.08;
 pub fn build(sc: &Scenario) -> SimRouteMap {
     let world = World {
         moving: Vec::new(),
-        ..World::from_scenario(sc)
+        ..sc.world()
     };
     let r = sc.robot_radius;
     let need = r + MARGIN_M;
@@ -302,7 +301,7 @@ fn highest_near(world: &World, p: V2, half: f64) -> Option<(f64, V2)> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use planner_core::route::RouteConfig;
+    use planner_core::maps::route::RouteConfig;
     use std::path::Path;
 
     fn scenario(rel: &str) -> Scenario {

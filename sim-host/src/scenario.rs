@@ -2,6 +2,8 @@
 //! start, one goal, in TOML. Unknown keys are errors, and every rule broken
 //! is reported with the file, the key and the rule.
 
+use crate::geom::V2;
+use crate::world::{Moving, World};
 use serde::Deserialize;
 use std::fmt;
 use std::path::{Path, PathBuf};
@@ -138,6 +140,29 @@ impl fmt::Display for ScenarioError {
 impl std::error::Error for ScenarioError {}
 
 impl Scenario {
+    /// The world this scenario describes.
+    pub fn world(&self) -> World {
+        let s = self;
+        let v = |p: [f64; 2]| V2::new(p[0], p[1]);
+        World {
+            bounds: s.bounds,
+            circles: s.circle.iter().map(|c| (v(c.center), c.radius)).collect(),
+            polygons: s
+                .polygon
+                .iter()
+                .map(|p| p.points.iter().map(|&q| v(q)).collect())
+                .collect(),
+            moving: s
+                .moving
+                .iter()
+                .map(|m| {
+                    let wps: Vec<V2> = m.waypoints.iter().map(|&q| v(q)).collect();
+                    Moving::new(v(m.center), m.radius, &wps, m.speed)
+                })
+                .collect(),
+        }
+    }
+
     /// Read and validate a file.
     pub fn load(path: &Path) -> Result<Scenario, ScenarioError> {
         let text = std::fs::read_to_string(path).map_err(|e| ScenarioError {
@@ -263,7 +288,7 @@ impl Scenario {
             if !finite(&p) || !inside(p) {
                 return fail(key, "must lie inside bounds");
             }
-            let world = crate::world::World::from_scenario(self);
+            let world = self.world();
             let clear = world.clearance(glam(p), 0.0);
             if clear < self.robot_radius - 1e-9 {
                 return fail(

@@ -12,7 +12,7 @@
 
 use crate::geom::V2;
 use crate::world::World;
-use planner_core::sensors::GP2Y0A21_MV_MM;
+use planner_core::eapf::sensors::GP2Y0A21_MV_MM;
 use planner_core::{AdcProfile, RawCounts, SENSOR_COUNT};
 use rand::{Rng, SeedableRng};
 use rand_distr::{Distribution, Normal};
@@ -239,7 +239,7 @@ mod tests {
     fn realistic_values_are_held_between_updates_and_seeded() {
         let text = "format = 1\nname = \"w\"\nbounds = [0.0, 0.0, 4.0, 4.0]\nstart = [1.0, 2.0]\ngoal = [3.0, 3.5]\n[[circle]]\ncenter = [1.6, 2.0]\nradius = 0.1\n";
         let sc = crate::scenario::Scenario::parse(text, std::path::Path::new("w")).unwrap();
-        let w = World::from_scenario(&sc);
+        let w = sc.world();
         let angles = [-0.698, -0.349, 0.0, 0.349, 0.698];
         let mk = |seed| {
             VirtualSensors::new(

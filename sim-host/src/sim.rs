@@ -374,7 +374,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     if cfg.planner.uses_map() {
         return run_known_map(sc, cfg);
     }
-    let world = World::from_scenario(sc);
+    let world = sc.world();
     let r = sc.robot_radius;
     let goal = V2::new(sc.goal[0], sc.goal[1]);
     let mut planner = SimPlanner::new(cfg.planner, sc, cfg.adc, cfg.set_back, cfg.sensors.noisy());
@@ -409,7 +409,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
     let mut outcome = Outcome::Timeout;
     let mut steps = 0;
     let debug = std::env::var_os("SIM_DEBUG").is_some();
-    let executor = planner_core::drive::ExecutorConfig::default();
+    let executor = planner_core::rover::drive::ExecutorConfig::default();
     let (settle_after_rad, settle_s) = (
         to_rad(executor.turn_tolerance),
         executor.settle_ticks as f64 / 1000.0,
@@ -496,7 +496,7 @@ pub fn run(sc: &Scenario, cfg: &SimConfig, reference: Option<f64>) -> RunResult 
         }
         // Advance in pieces of at most 1 cm, asking the guard before each
         // piece, the first one included: the firmware's executor
-        // (`planner_core::drive::Executor`) asks it on every tick of an
+        // (`planner_core::rover::drive::Executor`) asks it on every tick of an
         // advance before it drives, so the turn's new view of the way is
         // checked before the rover moves (the step was planned from the
         // readings before the turn).
@@ -564,15 +564,15 @@ pub fn trace_csv(rows: &[TraceRow]) -> String {
 }
 
 /// The host's plan buffers: 16,384 waypoints, 4,096 virtual obstacles.
-pub type HostPlan = planner_core::liquid::Plan<16_384, 4_096>;
+pub type HostPlan = planner_core::maps::liquid::Plan<16_384, 4_096>;
 
 /// Plan a scenario with the liquid-movement planner over its static map
 /// (circles, polygons, bounds), offline (`restart`) or online.
 pub fn plan_known_map(
     sc: &Scenario,
     restart: bool,
-) -> Result<Box<HostPlan>, planner_core::liquid::LiquidError> {
-    plan_on(&World::from_scenario(sc), sc, restart)
+) -> Result<Box<HostPlan>, planner_core::maps::liquid::LiquidError> {
+    plan_on(&sc.world(), sc, restart)
 }
 
 /// [`plan_known_map`] on the scenario's world, already built.
@@ -580,8 +580,8 @@ fn plan_on(
     world: &World,
     sc: &Scenario,
     restart: bool,
-) -> Result<Box<HostPlan>, planner_core::liquid::LiquidError> {
-    use planner_core::liquid::{plan, Circle, LiquidConfig, Map};
+) -> Result<Box<HostPlan>, planner_core::maps::liquid::LiquidError> {
+    use planner_core::maps::liquid::{plan, Circle, LiquidConfig, Map};
     let mm = |v: f64| (v * 1000.0).round().clamp(i16::MIN as f64, i16::MAX as f64) as i16;
     let circles: Vec<Circle> = world
         .circles
@@ -616,7 +616,7 @@ fn plan_on(
 /// waypoints (turn, then advance in pieces of at most 1 cm, checking the
 /// swept disc against the world, moving obstacles included).
 fn run_known_map(sc: &Scenario, cfg: &SimConfig) -> RunResult {
-    let world = World::from_scenario(sc);
+    let world = sc.world();
     let start = V2::new(sc.start[0], sc.start[1]);
     let r = sc.robot_radius;
     let mut p = start;
@@ -738,7 +738,7 @@ speed = 2.0
         // The circle where it was at the end: on the rover, which stood at
         // the start, drawn at its 0.2 m radius (SVG y grows downwards).
         let t_end = res.trace.last().unwrap().t;
-        let end = World::from_scenario(&sc).moving[0].center_at(t_end);
+        let end = sc.world().moving[0].center_at(t_end);
         assert!(end.dist(V2::new(1.0, 2.0)) <= 0.3, "{end:?}");
         let scale = 900.0 / 6.0;
         let (cx, cy) = ((end.x * scale), ((4.0 - end.y) * scale + 86.0));
@@ -759,7 +759,7 @@ speed = 2.0
             "center = [1.0, 3.0]\nradius = 0.1\nwaypoints = [[1.0, 2.2]]\nspeed = 1.0",
         );
         let sc = Scenario::parse(&text, Path::new("near.toml")).unwrap();
-        let world = World::from_scenario(&sc);
+        let world = sc.world();
         let p = V2::new(1.0, 2.0);
         let mut track = Track::new(&world, p, 0.0, 0.1);
         // As one linear motion its two ends would be 0.9 m clear.

@@ -78,7 +78,7 @@ pub fn render(
     // dashed ring) and where they were when the run ended (grey), so that
     // a picture of a collision shows what reached the rover.
     let t_end = run.trace.last().map_or(0.0, |r| r.t);
-    let movers = crate::world::World::from_scenario(sc).moving;
+    let movers = sc.world().moving;
     for (m, moving) in sc.moving.iter().zip(&movers) {
         let mut way = vec![V2::new(m.center[0], m.center[1])];
         way.extend(m.waypoints.iter().map(|w| V2::new(w[0], w[1])));

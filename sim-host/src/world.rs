@@ -2,7 +2,6 @@
 //! exact ray casting and exact swept-disc collision checking.
 
 use crate::geom::{self, polygon_edges, V2};
-use crate::scenario::Scenario;
 
 /// A circle moving back and forth along its waypoints at constant speed.
 #[derive(Clone, Debug)]
@@ -17,7 +16,7 @@ pub struct Moving {
 }
 
 impl Moving {
-    fn new(center: V2, radius: f64, waypoints: &[V2], speed: f64) -> Moving {
+    pub(crate) fn new(center: V2, radius: f64, waypoints: &[V2], speed: f64) -> Moving {
         let mut fwd = vec![center];
         fwd.extend(waypoints.iter().copied());
         // Back and forth: out along the waypoints, then back to the start.
@@ -92,28 +91,6 @@ pub struct World {
 }
 
 impl World {
-    /// The world of a scenario.
-    pub fn from_scenario(s: &Scenario) -> World {
-        let v = |p: [f64; 2]| V2::new(p[0], p[1]);
-        World {
-            bounds: s.bounds,
-            circles: s.circle.iter().map(|c| (v(c.center), c.radius)).collect(),
-            polygons: s
-                .polygon
-                .iter()
-                .map(|p| p.points.iter().map(|&q| v(q)).collect())
-                .collect(),
-            moving: s
-                .moving
-                .iter()
-                .map(|m| {
-                    let wps: Vec<V2> = m.waypoints.iter().map(|&q| v(q)).collect();
-                    Moving::new(v(m.center), m.radius, &wps, m.speed)
-                })
-                .collect(),
-        }
-    }
-
     fn boundary_segments(&self) -> [(V2, V2); 4] {
         let [x0, y0, x1, y1] = self.bounds;
         let (a, b, c, d) = (
@@ -306,13 +283,14 @@ impl World {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::Scenario;
     use std::path::Path;
 
     fn world(extra: &str) -> World {
         let text = format!(
             "format = 1\nname = \"w\"\nbounds = [0.0, 0.0, 10.0, 10.0]\nstart = [1.0, 1.0]\ngoal = [9.0, 9.0]\n{extra}"
         );
-        World::from_scenario(&Scenario::parse(&text, Path::new("w.toml")).unwrap())
+        Scenario::parse(&text, Path::new("w.toml")).unwrap().world()
     }
 
     #[test]
@@ -393,7 +371,7 @@ mod tests {
         for sc in &scenarios {
             let w = World {
                 moving: Vec::new(),
-                ..World::from_scenario(sc)
+                ..sc.world()
             };
             let h = 0.05;
             let [x0, y0, x1, y1] = sc.bounds;
@@ -462,7 +440,7 @@ mod tests {
         for sc in &scenarios {
             let w = World {
                 moving: Vec::new(),
-                ..World::from_scenario(sc)
+                ..sc.world()
             };
             let [x0, y0, x1, y1] = sc.bounds;
             let h = 0.073;

@@ -11,7 +11,7 @@
 //! failures").
 
 use clap::ValueEnum;
-use planner_core::liquid::LiquidConfig;
+use planner_core::maps::liquid::LiquidConfig;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use sim_host::planners::PlannerKind;

@@ -351,7 +351,7 @@ fn generated_runs(
 /// what it had met ahead), back to the same seek and hit, until the
 /// simulator's budget ran out. After a whole circle the follower passes
 /// what blocks on its side (`follow::Follow::hug`); with `note_turn` never
-/// counting a turn, each of these times out (checked).
+/// counting a turn, each of these times out.
 #[test]
 fn box_world_followers_leave_their_circles() {
     for (name, seed, outcome) in box_runs(&[(51, 1), (144, 1), (69, 4)], false) {
@@ -433,23 +433,20 @@ fn assert_walled_reported(world_seeds: &[u64]) {
     }
 }
 
-/// The first twelve walled worlds (the commit history, "Walled worlds"). With
-/// the follower's budget at 12 give-up budgets instead of 6 (5 now,
-/// `follow::BUDGET_GIVE_UPS`), walled-11 ran out of the simulator's budget
-/// first (checked), the rover going round islands that do not hold the
-/// goal.
+/// The first twelve walled worlds. With a follower's budget of 12 give-up
+/// budgets (`follow::BUDGET_GIVE_UPS` is 5), walled-11 runs out of the
+/// simulator's budget first, the rover going round islands that do not
+/// hold the goal.
 #[test]
 fn generated_walled_in_goals_are_reported_unreachable() {
     assert_walled_reported(&(1..=12).collect::<Vec<_>>());
 }
 
 /// Walled worlds whose first loop round the ring hands back to the
-/// potential field, so that the report comes from a second round. With
-/// that round's follower given as long as the first, each of these ran out
-/// of the simulator's budget before the second loop closed when both were
-/// 6 give-up budgets; with both at 5 (`follow::BUDGET_GIVE_UPS` now, and
-/// `follow::SECOND_GIVE_UPS` at 5, not 3) walled-71 still does, after
-/// 2,186 cycles (checked).
+/// potential field, so that the report comes from a second round. Given a
+/// second round as long as the first (`follow::SECOND_GIVE_UPS` as
+/// `follow::BUDGET_GIVE_UPS`), walled-71 runs out of the simulator's budget
+/// before the second loop closes.
 #[test]
 fn walled_in_goals_are_reported_after_a_shorter_second_round() {
     assert_walled_reported(&[47, 71, 79, 87]);
@@ -457,10 +454,9 @@ fn walled_in_goals_are_reported_after_a_shorter_second_round() {
 
 /// A walled world whose first round meets a second hit point, 1.5 m from
 /// the goal, and follows on from there round the ring and the boxes
-/// beside it (`SIM_DEBUG=1 sim-host run`): with the
-/// first round's budget at 6 give-up budgets, not 5
-/// (`follow::BUDGET_GIVE_UPS`), it ran out of the simulator's budget
-/// before the budget said "unreachable" (checked).
+/// beside it (`SIM_DEBUG=1 sim-host run`): with a first round of 6
+/// give-up budgets (`follow::BUDGET_GIVE_UPS` is 5), it runs out of the
+/// simulator's budget before the budget says "unreachable".
 #[test]
 fn a_walled_in_goal_is_reported_within_the_first_rounds_budget() {
     assert_walled_reported(&[45]);

@@ -263,7 +263,7 @@ pub enum LoopOutcome {
 }
 
 /// The emulated rover of the closed loop: the reference body
-/// (`planner_core::drive::Body::REFERENCE`), wheels at `duty/255 · 0.4 m/s`.
+/// (`planner_core::rover::drive::Body::REFERENCE`), wheels at `duty/255 · 0.4 m/s`.
 pub const WHEEL_SPEED_MPS: f64 = 0.4;
 
 /// A sensor unplugged during a [`drive_with`]: from `at_s` emulated
@@ -359,10 +359,9 @@ fn drive_mounted(
 ) -> LoopRun {
     use sim_host::geom::V2;
     use sim_host::sensor::{SensorMode, VirtualSensors};
-    use sim_host::world::World;
-    let world = World::from_scenario(sc);
-    let m_per_tick = planner_core::drive::Body::REFERENCE.um_per_tick() as f64 / 1e6;
-    let base = planner_core::drive::Body::REFERENCE.wheel_base_mm() as f64 / 1e3;
+    let world = sc.world();
+    let m_per_tick = planner_core::rover::drive::Body::REFERENCE.um_per_tick() as f64 / 1e6;
+    let base = planner_core::rover::drive::Body::REFERENCE.wheel_base_mm() as f64 / 1e3;
     let adc = planner_core::AdcProfile::AVR_10BIT_5V;
     // The firmware's geometry: its default configuration's.
     let cfg = planner_core::ConfigBuilder::new(adc)

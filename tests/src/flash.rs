@@ -10,7 +10,7 @@ pub const PARTS: [&str; 9] = [
     "the planner step, inlined into firmware_avr::timed::step",
     "the firmware's main loop (executor, odometry, protocol, telemetry inlined)",
     "the configuration, in program memory",
-    "the firmware's drivers and replay mode",
+    "the firmware's drivers",
     "ufmt (telemetry text)",
     "interrupt handlers",
     "libgcc, avr-libc and the firmware's assembly (multiply, division, start-up)",
@@ -60,13 +60,23 @@ pub fn parts(symbols: &[(u32, u32, String)]) -> Vec<(&'static str, u32)> {
 }
 
 /// The module of planner-core a symbol of its part is in: the path segment
-/// after the first `planner_core::` in its name (`Planner` for the
-/// planner's own methods, in the crate's root).
+/// after the first `planner_core::` in its name, or within a layer's folder
+/// the one after that (`escape` for `planner_core::eapf::escape::…`,
+/// `Planner` for the product planner's own methods).
 pub fn planner_module(name: &str) -> Option<&str> {
+    let segment = |rest: &str| {
+        let end = rest
+            .find(|c: char| !(c.is_alphanumeric() || c == '_'))
+            .unwrap_or(rest.len());
+        (end, rest.len() > end + 1 && rest[end..].starts_with("::"))
+    };
     let rest = &name[name.find("planner_core::")? + "planner_core::".len()..];
-    let end = rest
-        .find(|c: char| !(c.is_alphanumeric() || c == '_'))
-        .unwrap_or(rest.len());
+    let (end, more) = segment(rest);
+    // A layer's folder (`eapf::escape`): the module within it.
+    if more && ["eapf", "maps", "peers", "rover"].contains(&&rest[..end]) {
+        let inner = &rest[end + 2..];
+        return Some(&inner[..segment(inner).0]);
+    }
     Some(&rest[..end])
 }
 
@@ -99,9 +109,9 @@ mod tests {
             ("firmware_avr::__avr_device_rt_main", 2),
             ("firmware_avr::progmem::CONFIG::VALUE", 3),
             ("__vector_21", 6),
-            ("<planner_core::escape::Escape>::force", 0),
+            ("<planner_core::eapf::escape::Escape>::force", 0),
             (
-                "<core::array::iter::IntoIter<&planner_core::sensors::Reading, 3> as core::iter::traits::iterator::Iterator>::position::<planner_core::follow::side_of::{closure#0}>",
+                "<core::array::iter::IntoIter<&planner_core::eapf::sensors::Reading, 3> as core::iter::traits::iterator::Iterator>::position::<planner_core::eapf::follow::side_of::{closure#0}>",
                 0,
             ),
             (
@@ -130,25 +140,26 @@ mod tests {
     #[test]
     fn planner_symbols_go_to_their_modules() {
         assert_eq!(
-            planner_module("<planner_core::escape::Escape>::force"),
+            planner_module("<planner_core::eapf::escape::Escape>::force"),
             Some("escape")
         );
         assert_eq!(planner_module("planner_core::fixed::isqrt"), Some("fixed"));
         assert_eq!(
-            planner_module("<planner_core::Planner>::set_goal"),
+            planner_module("<planner_core::eapf::Planner>::set_goal"),
             Some("Planner")
         );
+        assert_eq!(planner_module("planner_core::eapf"), Some("eapf"));
         assert_eq!(
             planner_module(
-                "<core::array::iter::IntoIter<&planner_core::sensors::Reading, 3>>::next"
+                "<core::array::iter::IntoIter<&planner_core::eapf::sensors::Reading, 3>>::next"
             ),
             Some("sensors")
         );
         assert_eq!(planner_module("__mulsi3"), None);
         let syms: Vec<(u32, u32, String)> = [
-            (4, "<planner_core::escape::Escape>::force"),
+            (4, "<planner_core::eapf::escape::Escape>::force"),
             (9, "planner_core::fixed::isqrt"),
-            (3, "planner_core::escape::reach_mm"),
+            (3, "planner_core::eapf::escape::reach_mm"),
             (50, "firmware_avr::timed::step"),
         ]
         .iter()

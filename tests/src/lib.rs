@@ -18,7 +18,6 @@ use sim_host::geom::V2;
 use sim_host::scenario::Scenario;
 use sim_host::sensor::{SensorMode, VirtualSensors};
 use sim_host::units::{to_angle, to_point, to_rad};
-use sim_host::world::World;
 use std::path::{Path, PathBuf};
 
 /// The repository root.
@@ -139,7 +138,7 @@ pub fn record_with(
     seed: u64,
     set_back: bool,
 ) -> Trace {
-    let world = World::from_scenario(sc);
+    let world = sc.world();
     let cfg = ConfigBuilder::new(adc)
         .sensors_set_back(set_back)
         .build()

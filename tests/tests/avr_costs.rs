@@ -9,8 +9,8 @@
 #[path = "../../firmware-avr/src/bench_inputs.rs"]
 mod bench_inputs;
 
-use planner_core::command::free_distance_mm;
-use planner_core::escape::Escape;
+use planner_core::eapf::command::free_distance_mm;
+use planner_core::eapf::escape::Escape;
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{AdcProfile, Angle, ConfigBuilder, Reading};
 use rover_tests::avr::{costs_elf, Avr};
@@ -99,7 +99,7 @@ fn the_step_parts_compute_the_host_results_and_print_their_cycles() {
     }
     assert_eq!(
         cycles["vo_force"].len(),
-        planner_core::escape::VIRTUAL_CAPACITY,
+        planner_core::eapf::escape::VIRTUAL_CAPACITY,
         "one timing per obstacle added, up to the capacity"
     );
 }

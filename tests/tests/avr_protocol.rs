@@ -1,10 +1,10 @@
-//! The ATmega328P firmware's serial protocol (`planner_core::protocol`) as
+//! The ATmega328P firmware's serial protocol (`planner_core::rover::protocol`) as
 //! a user meets it in simavr: bad lines get `ERR`, never a reset; a goal
 //! starts the drive and its telemetry; the pose cannot be set while
 //! driving; `S` stops the motors; `D` reports the sensors as the host's
 //! core reads them.
 
-use planner_core::protocol::write_sensor_line;
+use planner_core::rover::protocol::write_sensor_line;
 use planner_core::{AdcProfile, ConfigBuilder, RawCounts};
 use rover_tests::avr::{wheels_for_1ms, Avr};
 

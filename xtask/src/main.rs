@@ -117,33 +117,24 @@ fn ensure_tools() {
             );
         }
     }
-    // `cargo size` reads the firmware images' sizes (the firmware READMEs'
-    // command; the tests check it against avr-size and llvm-size).
-    if output("cargo", &["size", "--version"]).is_empty() {
-        run(
-            &dir,
-            "cargo",
-            &["+stable", "install", "--locked", "cargo-binutils"],
-            &[],
-        );
-    }
-    // cargo-fuzz runs the fuzz targets (fuzz/).
-    if output("cargo", &["fuzz", "--version"]).is_empty() {
-        run(
-            &dir,
-            "cargo",
-            &["+stable", "install", "--locked", "cargo-fuzz"],
-            &[],
-        );
-    }
-    // defmt-print decodes the emulated STM32 firmware's log.
-    if output("defmt-print", &["--version"]).is_empty() {
-        run(
-            &dir,
-            "cargo",
-            &["+stable", "install", "--locked", "defmt-print"],
-            &[],
-        );
+    // Cargo-installed tools, each checked by running it: `cargo size`
+    // reads the firmware images' sizes (the firmware READMEs' command; the
+    // tests check it against avr-size and llvm-size), cargo-fuzz runs the
+    // fuzz targets (fuzz/), defmt-print decodes the emulated STM32
+    // firmware's log.
+    for (cmd, args, krate) in [
+        ("cargo", &["size", "--version"][..], "cargo-binutils"),
+        ("cargo", &["fuzz", "--version"][..], "cargo-fuzz"),
+        ("defmt-print", &["--version"][..], "defmt-print"),
+    ] {
+        if output(cmd, args).is_empty() {
+            run(
+                &dir,
+                "cargo",
+                &["+stable", "install", "--locked", krate],
+                &[],
+            );
+        }
     }
     let missing: Vec<&str> = DEBIAN_PACKAGES
         .iter()

@@ -35,8 +35,8 @@ mod serial;
 
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
-use planner_core::command::free_distance_mm;
-use planner_core::escape::{Escape, VIRTUAL_CAPACITY};
+use planner_core::eapf::command::free_distance_mm;
+use planner_core::eapf::escape::{Escape, VIRTUAL_CAPACITY};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{Angle, Reading};
 use serial::Serial;

@@ -25,7 +25,7 @@ mod serial;
 
 use core::f32::consts::TAU;
 use core::sync::atomic::{compiler_fence, Ordering};
-use planner_core::protocol::{self, Request};
+use planner_core::rover::protocol::{self, Request};
 use planner_core::{Angle, Command, Config, Guard, Output, Pose, RawCounts};
 use planner_float::{FloatPlanner, Math};
 use ufmt::uwriteln;

@@ -1,5 +1,5 @@
 //! The `replay` binary: the firmware's planner behind the replay protocol
-//! (`R x y`, then frames; `planner_core::protocol`), each guard look and
+//! (`R x y`, then frames; `planner_core::rover::protocol`), each guard look and
 //! step timed in cycles, and `M` for the stack's peak. The emulator tests
 //! replay recorded traces through it, bit for bit against the host, and
 //! time them; the production image (`firmware-avr`) does not carry it. It
@@ -29,7 +29,7 @@ mod stack;
 mod timed;
 
 use core::sync::atomic::{compiler_fence, Ordering};
-use planner_core::protocol::{self, Request};
+use planner_core::rover::protocol::{self, Request};
 use planner_core::{Config, Guard, Output, Planner, Point, Pose, RawCounts};
 use ufmt::uwriteln;
 

@@ -22,10 +22,10 @@
 //! perimeters of the obstacles the m-line crosses nᵢ times).
 
 use super::{begin, hug, HitLoop, Senses, Side, FREE_STEP_MM, HUG_FREE_MM};
-use crate::command::{Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{RawCounts, Reading};
 use crate::fixed::{Angle, Point};
-use crate::sensors::{RawCounts, Reading};
 use crate::Pose;
 
 /// The rover is on the m-line within this, mm (its steps along a boundary
@@ -220,7 +220,7 @@ impl Bug2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::test_config;
+    use crate::eapf::config::test_config;
     use crate::peers::tests::counts;
 
     const CLEAR: [Option<u16>; 5] = [None; 5];

@@ -43,10 +43,10 @@
 //! for the simulator and the STM32's class of memory, not the AVR's.
 
 use super::{begin, Senses, FREE_STEP_MM};
-use crate::command::{Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{RawCounts, SENSOR_COUNT};
 use crate::fixed::{Angle, Point};
-use crate::sensors::{RawCounts, SENSOR_COUNT};
 use crate::Pose;
 
 /// A cell's side, mm (a power of two: a cell index is a shift).
@@ -514,7 +514,7 @@ fn step(x: usize, y: usize, ox: usize, oy: usize, n: usize) -> Option<(usize, us
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::test_config;
+    use crate::eapf::config::test_config;
     use crate::peers::tests::counts;
 
     type Small = FreeSpace<64>;
@@ -646,7 +646,7 @@ mod tests {
         let cal = cfg.calibration(2).unwrap();
         near[2] = (0..cal.full_scale())
             .rev()
-            .find(|&c| cal.reading(c) == crate::sensors::Reading::TooClose)
+            .find(|&c| cal.reading(c) == crate::eapf::sensors::Reading::TooClose)
             .unwrap();
         p.step_raw(at(0, 0, 0), &near);
         assert!(blocked(&p, ahead));

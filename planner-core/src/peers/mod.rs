@@ -20,6 +20,7 @@
 //! - [`HitLoop`]: "back at the hit point": the Bug family's proof that the
 //!   goal is unreachable.
 
+pub mod apf;
 pub mod bug2;
 pub mod freespace;
 pub mod tangent_bug;
@@ -29,10 +30,10 @@ pub use bug2::Bug2;
 pub use tangent_bug::TangentBug;
 pub use vfh::Vfh;
 
-use crate::command::{self, Command, Guard, Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{self, Command, Guard, Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{FoldBackFilter, RawCounts, Reading, Readings, SENSOR_COUNT};
 use crate::fixed::{box_within, within, Angle, Dir, Point};
-use crate::sensors::{FoldBackFilter, RawCounts, Reading, Readings, SENSOR_COUNT};
 use crate::{Navigator, Planner, Pose};
 
 /// A heading is taken while following a boundary if its way is free this
@@ -473,7 +474,7 @@ impl<const N: usize> Navigator for freespace::FreeSpace<N> {
 #[cfg(test)]
 pub(crate) mod tests {
     use super::*;
-    use crate::config::test_config;
+    use crate::eapf::config::test_config;
 
     /// Counts that read `mm` from the face on every sensor (`None`: clear).
     pub fn counts(cfg: &Config, mm: [Option<u16>; SENSOR_COUNT]) -> RawCounts {

@@ -33,10 +33,10 @@
 //!   there).
 
 use super::{begin, hug, HitLoop, Senses, Side, FREE_STEP_MM, HUG_FREE_MM};
-use crate::command::{Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{RawCounts, Reading, SENSOR_COUNT};
 use crate::fixed::{Angle, Point};
-use crate::sensors::{RawCounts, Reading, SENSOR_COUNT};
 use crate::Pose;
 
 /// The heuristic distance has grown (motion to goal), or d_reach is below
@@ -221,7 +221,7 @@ impl TangentBug {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::test_config;
+    use crate::eapf::config::test_config;
     use crate::peers::tests::counts;
 
     #[test]

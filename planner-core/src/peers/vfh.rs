@@ -31,10 +31,10 @@
 //! so far in [`GIVE_UP_CYCLES`] cycles reports the goal unreachable.
 
 use super::{begin, Senses, FREE_STEP_MM};
-use crate::command::{Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{RawCounts, Reading, SENSOR_COUNT};
 use crate::fixed::{isqrt, Angle, Point};
-use crate::sensors::{RawCounts, Reading, SENSOR_COUNT};
 use crate::Pose;
 
 /// Cells per side of the window (odd: the rover's cell is the centre).

@@ -58,9 +58,9 @@
 //! rule's (never beyond what the readings and the guard's flank points show
 //! free), so following adds no way to collide.
 
-use crate::config::Config;
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{Reading, Readings, SENSOR_COUNT};
 use crate::fixed::{hypot, within, Angle, Point};
-use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// A heading is taken while seeking or following if its way is free this
 /// far, mm.
@@ -491,9 +491,9 @@ fn clamp(a: Angle, half: Angle) -> Angle {
 mod tests {
     use super::*;
 
-    use crate::config::test_config as cfg;
-    use crate::config::ConfigBuilder;
-    use crate::sensors::AdcProfile;
+    use crate::eapf::config::test_config as cfg;
+    use crate::eapf::config::ConfigBuilder;
+    use crate::eapf::sensors::AdcProfile;
 
     const CLEAR: Readings = [Reading::Clear; SENSOR_COUNT];
     /// Something 150 mm off the left beams' faces, nothing on the right.

@@ -10,7 +10,7 @@
 //! ±524 m), heading in 1/2³² of a turn (`u32`, wraps), so that sub-tick
 //! motion accumulates without drift from rounding.
 
-use crate::command::{Command, Guard};
+use crate::eapf::command::{Command, Guard};
 use crate::fixed::{mul_q14, sat_i16, Angle, Point};
 use crate::Pose;
 

@@ -16,11 +16,11 @@
 //! EAPF planner), otherwise a force outside the sector gives a turn with
 //! zero step.
 
-use crate::command::{self, Command, Output, Status};
-use crate::config::Config;
+use crate::eapf::command::{self, Command, Guard, Output, Status};
+use crate::eapf::config::Config;
+use crate::eapf::forces::obstacle_distance_mm;
+use crate::eapf::sensors::{RawCounts, Reading};
 use crate::fixed::{inverse_square_force, Force, FORCE_ONE};
-use crate::forces::obstacle_distance_mm;
-use crate::sensors::{RawCounts, Reading};
 use crate::{Planner, Point, Pose};
 
 /// The baseline's parameters.
@@ -156,12 +156,24 @@ impl ApfPlanner {
     }
 }
 
+impl crate::Navigator for ApfPlanner {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        ApfPlanner::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        ApfPlanner::guard_raw(self, raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        ApfPlanner::config(self)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::ConfigBuilder;
+    use crate::eapf::config::ConfigBuilder;
+    use crate::eapf::sensors::AdcProfile;
     use crate::fixed::Angle;
-    use crate::sensors::AdcProfile;
 
     fn apf(goal: Point) -> ApfPlanner {
         let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)

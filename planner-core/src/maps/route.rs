@@ -47,7 +47,7 @@
 //!   directly, and its own give-up budget (the escape's) decides whether
 //!   the goal is unreachable.
 
-use crate::config::Config;
+use crate::eapf::config::Config;
 use crate::fixed::{hypot, Point};
 use crate::{Guard, Output, Planner, Pose, RawCounts, Status};
 
@@ -745,6 +745,18 @@ impl<const N: usize, const E: usize> RoutePlanner<N, E> {
     }
 }
 
+impl<const N: usize, const E: usize> crate::Navigator for RoutePlanner<N, E> {
+    fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
+        RoutePlanner::step_raw(self, pose, raw)
+    }
+    fn guard_raw(&mut self, raw: &RawCounts, remaining_mm: u16) -> Guard {
+        RoutePlanner::guard_raw(self, raw, remaining_mm)
+    }
+    fn config(&self) -> &Config {
+        self.planner().config()
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -900,7 +912,7 @@ mod tests {
         m
     }
 
-    use crate::config::test_config as config;
+    use crate::eapf::config::test_config as config;
 
     /// Nodes at `points`, each joined to the next by an edge of the
     /// clearance given for it.

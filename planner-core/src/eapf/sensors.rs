@@ -150,7 +150,7 @@ pub struct Calibration {
 }
 
 impl Calibration {
-    /// All zeros: part of [`crate::config::Config::UNSET`].
+    /// All zeros: part of [`crate::eapf::config::Config::UNSET`].
     pub(crate) const UNSET: Calibration = Calibration {
         shift: 0,
         full_scale: 0,

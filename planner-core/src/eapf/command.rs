@@ -7,10 +7,10 @@
 //! next steps keep the body off it, where the five beams of a turned view
 //! cannot look.
 
-use crate::config::Config;
+use crate::eapf::config::Config;
+use crate::eapf::forces::sensor_direction;
+use crate::eapf::sensors::{Reading, Readings, SENSOR_COUNT};
 use crate::fixed::{box_within, isqrt, mul_q14, Angle, Dir, Point};
-use crate::forces::sensor_direction;
-use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 /// One cycle's command: turn in place to `heading` (world frame), then
 /// advance `step_mm` straight ahead.
@@ -39,7 +39,7 @@ pub enum Status {
     Unreachable,
     /// A sensor gave a reading it cannot produce, or its count stayed the
     /// same over views in which a working sensor's would have changed
-    /// ([`crate::sensors::FreezeWatch`]): stop (the step is zero).
+    /// ([`crate::eapf::sensors::FreezeWatch`]): stop (the step is zero).
     SensorFault,
 }
 
@@ -468,8 +468,8 @@ pub fn guard(cfg: &Config, readings: &Readings, remaining_mm: u16) -> Guard {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::ConfigBuilder;
-    use crate::sensors::{AdcProfile, SENSOR_COUNT};
+    use crate::eapf::config::ConfigBuilder;
+    use crate::eapf::sensors::{AdcProfile, SENSOR_COUNT};
 
     #[test]
     fn status_codes_round_trip() {
@@ -484,7 +484,7 @@ mod tests {
         assert_eq!(Status::from_code(4), None);
     }
 
-    use crate::config::test_config as cfg;
+    use crate::eapf::config::test_config as cfg;
 
     #[test]
     fn free_distance_by_hand() {

@@ -2,9 +2,9 @@
 //! [`Force`] pointing the way the paper describes (eq. 16's printed signs are
 //! inconsistent; the directions are the design).
 
-use crate::config::{Config, MAX_GAIN};
+use crate::eapf::config::{Config, MAX_GAIN};
+use crate::eapf::sensors::{Reading, Readings, SENSOR_COUNT};
 use crate::fixed::{inverse_square_force, mul_q14, Angle, Dir, Force, MAX_SCALED};
-use crate::sensors::{Reading, Readings, SENSOR_COUNT};
 
 // The attraction, midpoint and off-sensor forces scale a direction by a
 // gain without a clamp (`Force::along_bounded`).
@@ -32,10 +32,8 @@ pub fn obstacle_distance_mm(cfg: &Config, r: Reading) -> Option<u16> {
 /// (inside the corridor, with our safety margin) and `D·cos θs ≤ step`.
 ///
 /// Out of line on the AVR (with `off_sensor`, `Memory::remember` and
-/// `Escape::observe`): inlined, the step's frame spilled past the 63 bytes
-/// one load reaches (`cargo xtask avr-report`: the four out of line took
-/// the mean step 14,718 → 14,574 cycles, text −356 bytes; the STM32 is
-/// unchanged).
+/// `Escape::observe`): inlined, the step's frame spills past the 63 bytes
+/// one load reaches (docs/performance.md, "Memory layout on the AVR").
 #[cfg_attr(target_arch = "avr", inline(never))]
 pub fn collision_points(
     cfg: &Config,
@@ -154,10 +152,10 @@ pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::config::ConfigBuilder;
-    use crate::sensors::AdcProfile;
+    use crate::eapf::config::ConfigBuilder;
+    use crate::eapf::sensors::AdcProfile;
 
-    use crate::config::test_config as cfg;
+    use crate::eapf::config::test_config as cfg;
 
     #[test]
     fn collision_point_conditions_by_hand() {

@@ -53,8 +53,8 @@
 //! control tick are off during replay, and the firmware runs each guard
 //! look and step with interrupts off, so that their cycles are theirs alone.
 
-use crate::config::Config;
-use crate::sensors::{RawCounts, Reading};
+use crate::eapf::config::Config;
+use crate::eapf::sensors::{RawCounts, Reading};
 
 /// One parsed command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -253,8 +253,8 @@ mod tests {
     /// the calibration of each sensor.
     #[test]
     fn the_sensor_line_says_counts_then_readings() {
-        use crate::config::ConfigBuilder;
-        use crate::sensors::AdcProfile;
+        use crate::eapf::config::ConfigBuilder;
+        use crate::eapf::sensors::AdcProfile;
         let adc = AdcProfile::AVR_10BIT_5V;
         let cfg = ConfigBuilder::new(adc).build().unwrap();
         let cal = cfg.calibration(0).unwrap();

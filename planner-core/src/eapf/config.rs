@@ -5,11 +5,10 @@
 //! The builder and its checks are `const fn`: a firmware builds its
 //! configuration in a `const`, so that a bad one fails the build and the
 //! image holds the finished tables instead of the code that computes them
-//! (built at start-up, the AVR image was 2,434 bytes larger and the STM32's
-//! 4,116: `cargo xtask avr-report`, `cargo xtask stm32-report`).
+//! (docs/performance.md).
 
+use crate::eapf::sensors::{AdcProfile, Calibration, CalibrationError, FOLD_BACK_MM, SENSOR_COUNT};
 use crate::fixed::{in_range, Angle, Dir, FORCE_ONE};
-use crate::sensors::{AdcProfile, Calibration, CalibrationError, FOLD_BACK_MM, SENSOR_COUNT};
 
 /// The largest gain (ξ_att, ξ_MP, ξ_sen) a configuration takes: 16 force
 /// units, Q10. The forces built from a gain rely on it (they scale a
@@ -38,7 +37,7 @@ pub enum ConfigError {
     AngleTolerance,
     /// Clearance or stand-off above 500 mm.
     Clearance,
-    /// Escape parameters out of range (see [`crate::escape`]).
+    /// Escape parameters out of range (see [`crate::eapf::escape`]).
     Escape,
     /// A calibration table was refused (sensor index, reason).
     Calibration(u8, CalibrationError),
@@ -71,9 +70,9 @@ pub struct Config {
     pub(crate) min_step_mm: u16,
     pub(crate) diagonal_tolerance: Angle,
     pub(crate) direct_tolerance: Angle,
-    pub(crate) escape: crate::escape::EscapeConfig,
+    pub(crate) escape: crate::eapf::escape::EscapeConfig,
     /// Views after an advance with one count before a sensor is frozen
-    /// ([`crate::sensors::FreezeWatch`]; 0: never).
+    /// ([`crate::eapf::sensors::FreezeWatch`]; 0: never).
     pub(crate) frozen_views: u8,
     pub(crate) calibration: [Calibration; SENSOR_COUNT],
     /// The sensor faces sit at least their minimum range behind the rim
@@ -110,7 +109,7 @@ impl Config {
         min_step_mm: 0,
         diagonal_tolerance: Angle(0),
         direct_tolerance: Angle(0),
-        escape: crate::escape::EscapeConfig {
+        escape: crate::eapf::escape::EscapeConfig {
             enabled: false,
             window_steps: 0,
             stuck_mm: 0,
@@ -199,7 +198,7 @@ impl Config {
         self.clearance_mm
     }
     /// The escape (virtual obstacle) parameters.
-    pub fn escape(&self) -> &crate::escape::EscapeConfig {
+    pub fn escape(&self) -> &crate::eapf::escape::EscapeConfig {
         &self.escape
     }
 }
@@ -237,7 +236,7 @@ pub struct ConfigBuilder {
     min_step_mm: u16,
     diagonal_tolerance_deg: i16,
     direct_tolerance_deg: i16,
-    escape: crate::escape::EscapeConfig,
+    escape: crate::eapf::escape::EscapeConfig,
     frozen_views: u8,
 }
 
@@ -259,7 +258,7 @@ impl ConfigBuilder {
     /// | minimum step | 10 mm | ours: shorter steps become a pure turn |
     /// | XY tolerance | 5° from a diagonal | ours (eq. 13 needs one) |
     /// | DM tolerance | 5° from the target bearing | ours |
-    /// | frozen after | 8 views | ours: a count the same in 8 views in a row, each after an advance, is a sensor stuck ([`crate::sensors::FreezeWatch`]) |
+    /// | frozen after | 8 views | ours: a count the same in 8 views in a row, each after an advance, is a sensor stuck ([`crate::eapf::sensors::FreezeWatch`]) |
     pub const fn new(adc: AdcProfile) -> Self {
         ConfigBuilder {
             adc,
@@ -277,14 +276,14 @@ impl ConfigBuilder {
             min_step_mm: 10,
             diagonal_tolerance_deg: 5,
             direct_tolerance_deg: 5,
-            escape: crate::escape::EscapeConfig::DEFAULT,
+            escape: crate::eapf::escape::EscapeConfig::DEFAULT,
             frozen_views: 8,
         }
     }
 
     /// A sensor whose count is the same in `views` views in a row, each
     /// after an advance, is stuck: the planner stops with a sensor fault
-    /// ([`crate::sensors::FreezeWatch`]). 0 never calls a sensor stuck:
+    /// ([`crate::eapf::sensors::FreezeWatch`]). 0 never calls a sensor stuck:
     /// for noise-free sensors (a simulation's), whose count is the same
     /// whenever the distance is.
     pub const fn frozen_after_views(mut self, views: u8) -> Self {
@@ -365,7 +364,7 @@ impl ConfigBuilder {
         self
     }
     /// Escape (virtual obstacle) parameters.
-    pub const fn escape(mut self, v: crate::escape::EscapeConfig) -> Self {
+    pub const fn escape(mut self, v: crate::eapf::escape::EscapeConfig) -> Self {
         self.escape = v;
         self
     }
@@ -489,7 +488,7 @@ const fn corridor_mm(dir: Dir, half_width: u16) -> u16 {
 /// The default configuration for the AVR's ADC, for the modules' tests.
 #[cfg(test)]
 pub(crate) fn test_config() -> Config {
-    ConfigBuilder::new(crate::sensors::AdcProfile::AVR_10BIT_5V)
+    ConfigBuilder::new(crate::eapf::sensors::AdcProfile::AVR_10BIT_5V)
         .build()
         .unwrap()
 }
