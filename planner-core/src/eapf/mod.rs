@@ -265,7 +265,7 @@ impl Planner {
         #[cfg(feature = "report")]
         self.last_points.clear();
         let stop = |status| Output::stop(pose.heading, status);
-        let frozen = moved && self.freeze.frozen(raw, self.config.frozen_views);
+        let frozen = self.freeze.frozen(raw, moved, self.config.frozen_views);
         if frozen || readings.contains(&Reading::Implausible) {
             return stop(Status::SensorFault);
         }
@@ -1306,11 +1306,11 @@ mod tests {
             let out = p.step_raw(at(0, 0, 0), &counts(k));
             assert_eq!(out.status, Status::Moving, "view {k} on the spot");
         }
-        // Advancing: the views after advances are compared with each
-        // other, and the eighth with one count is a fault.
-        for k in 1..=8 {
+        // Advancing: the last view on the spot and seven after advances
+        // with one count are a fault.
+        for k in 1..=7 {
             let out = p.step_raw(at(20 * k, 0, 0), &counts(k));
-            let want = if k < 8 {
+            let want = if k < 7 {
                 Status::Moving
             } else {
                 Status::SensorFault
@@ -1318,9 +1318,32 @@ mod tests {
             assert_eq!(out.status, want, "view {k} after an advance");
         }
         // The sensor changes: trusted again.
-        let mut changed = counts(9);
+        let mut changed = counts(8);
         changed[2] = 58;
-        assert_eq!(p.step_raw(at(200, 0, 0), &changed).status, Status::Moving);
+        assert_eq!(p.step_raw(at(160, 0, 0), &changed).status, Status::Moving);
+        // A change in a view on the spot ends a streak too: six views
+        // after advances, one on the spot with another count, and eight
+        // more after advances before the fault.
+        let mut p = Planner::new(cfg, Point::new(30_000, 0));
+        let mut x = 0;
+        let mut view = |p: &mut Planner, advance: bool, c: u16| {
+            x += if advance { 20 } else { 0 };
+            let mut raw = counts(x / 20);
+            raw[2] = c;
+            p.step_raw(at(x, 0, 0), &raw).status
+        };
+        for _ in 0..6 {
+            assert_eq!(view(&mut p, true, 57), Status::Moving);
+        }
+        assert_eq!(view(&mut p, false, 59), Status::Moving);
+        for k in 1..=8 {
+            let want = if k < 8 {
+                Status::Moving
+            } else {
+                Status::SensorFault
+            };
+            assert_eq!(view(&mut p, true, 57), want, "view {k} after the change");
+        }
         // Off (noise-free sensors): never.
         let off = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
             .frozen_after_views(0)

@@ -434,29 +434,31 @@ pub type Readings = [Reading; SENSOR_COUNT];
 /// each after an advance (so that the sensor has put out new values in
 /// between), is a sensor that no longer looks.
 ///
-/// It compares the views after advances only, each with the one after the
-/// advance before (the views on the spot between them cost nothing), and
-/// keeps one streak for all sensors, not one count each: the sensors that
-/// repeated at the streak's first view, less each that has changed since.
-/// A sensor that starts to repeat during another's streak is counted from
-/// the next streak: found later, never wrongly.
+/// Every view is compared with the one before, and a change ends the
+/// streak; only the views after an advance count towards the eight, so
+/// that two views of one sensor output (a turn too short for the sensor
+/// to put out a new value) do not. The watch keeps one streak for all sensors, not one count each:
+/// the sensors that repeated at the streak's first view, less each that
+/// has changed since. A sensor that starts to repeat during another's
+/// streak is counted from the next streak: found later, never wrongly.
 #[derive(Clone, Debug, Default, PartialEq, Eq)]
 #[cfg_attr(feature = "defmt", derive(defmt::Format))]
 pub struct FreezeWatch {
-    /// The counts of the last view after an advance.
+    /// The counts of the last view.
     last: RawCounts,
     /// Bit `i`: sensor `i` has repeated its count in every view of the
     /// streak.
     suspects: u8,
-    /// Views in the streak.
+    /// Views after an advance in the streak, the first one included.
     views: u8,
 }
 
 impl FreezeWatch {
-    /// Take the counts of a view after an advance: whether a sensor's count
-    /// has now been the same in `views` such views in a row (never for
-    /// `views` 0).
-    pub fn frozen(&mut self, raw: &RawCounts, views: u8) -> bool {
+    /// Take a view's counts, `moved` if the rover advanced since the last
+    /// view: whether a sensor's count has now been the same in `views`
+    /// views, each after the first taken after an advance, and in every
+    /// view between them (never for `views` 0).
+    pub fn frozen(&mut self, raw: &RawCounts, moved: bool, views: u8) -> bool {
         let mut same = 0;
         for (i, (&c, last)) in raw.iter().zip(self.last.iter_mut()).enumerate() {
             if c == *last {
@@ -465,11 +467,14 @@ impl FreezeWatch {
             *last = c;
         }
         self.suspects &= same;
-        if self.suspects == 0 {
-            self.suspects = same;
-            self.views = 1;
+        if moved {
+            if self.suspects == 0 {
+                // A new streak: the count before and this one.
+                self.suspects = same;
+                self.views = 1;
+            }
+            self.views = self.views.saturating_add(1);
         }
-        self.views = self.views.saturating_add(1);
         views > 0 && self.suspects != 0 && self.views >= views
     }
 }
