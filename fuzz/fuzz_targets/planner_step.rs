@@ -1,12 +1,15 @@
 //! The product planner's step and guard on any goal, poses and counts, on
 //! either board's ADC: no panic, and every step keeps the rules of
-//! `Output::broken_rule` (the safety rule among them).
+//! `Output::broken_rule` (the safety rule among them), but the wedge's
+//! back-out, which goes back along the way the disc has just swept (the
+//! property test `the_safety_rule_holds_over_long_closed_loop_runs` holds
+//! its guard): that one is within the sensors' range.
 
 #![no_main]
 
 use arbitrary::Arbitrary;
 use libfuzzer_sys::fuzz_target;
-use planner_core::{AdcProfile, Angle, ConfigBuilder, Planner, Point, Pose, RawCounts};
+use planner_core::{AdcProfile, Angle, BrokenRule, ConfigBuilder, Planner, Point, Pose, RawCounts};
 
 #[derive(Arbitrary, Debug)]
 struct Cycle {
@@ -41,7 +44,13 @@ fuzz_target!(|run: Run| {
             heading: Angle(c.heading),
         };
         let out = planner.step_raw(pose, &c.raw);
-        if let Some(rule) = out.broken_rule(&cfg, planner.last_readings(), pose) {
+        let rule = match planner.backing_out() {
+            true => {
+                (out.command.step_mm > cfg.sensor_range_mm()).then_some(BrokenRule::BeyondRange)
+            }
+            false => out.broken_rule(&cfg, planner.last_readings(), pose),
+        };
+        if let Some(rule) = rule {
             panic!("{rule:?}: {out:?} at {pose:?} from {:?}", c.raw);
         }
         for g in c.guard.iter().take(8) {
