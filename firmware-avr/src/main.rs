@@ -218,11 +218,10 @@ fn main() -> ! {
             }
             executor.start(step.command);
         }
-        // A guard look costs 5,900 cycles on average and 12,000 at most on
-        // the replayed advances (it also keeps the flank points; printed by
-        // `cargo test --release -p rover-tests --test avr_firmware -- --nocapture`),
-        // about one control tick: run it every GUARD_PERIOD_MS on fresh
-        // counts. The sensors themselves update every ~38 ms; the rover
+        // A guard look (it also keeps the flank points) costs about a control
+        // tick (`cargo test --release -p rover-tests --test avr_firmware --
+        // --nocapture` prints its cycles): run it every GUARD_PERIOD_MS on
+        // fresh counts. The sensors themselves update every ~38 ms; the rover
         // covers 1.4 mm in 4 ms at full speed.
         let sweep = adc::sweeps();
         let due = now.wrapping_sub(last_guard_ms) >= GUARD_PERIOD_MS && sweep != last_sweep;

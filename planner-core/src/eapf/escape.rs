@@ -384,9 +384,9 @@ impl Escape {
     /// No history.
     ///
     /// Always inlined: otherwise the AVR builds it in a 185-byte temporary
-    /// and copies it into the planner, and at start-up that temporary sat
-    /// on the stack beside the configuration's copy (the stack peak rose
-    /// 185 bytes, over the RAM there is; `cargo xtask avr-report`).
+    /// and copies it into the planner, and at start-up that temporary sits
+    /// on the stack beside the configuration's copy, past the RAM there is
+    /// (`tests/src/stack_bound.rs` bounds the stack).
     #[inline(always)]
     pub const fn new() -> Self {
         Escape {
@@ -561,8 +561,7 @@ impl Escape {
                 // for both axes: t ≤ 2^15 and 2^16/V_r ≤ 6,554 (V_r ≥ 10
                 // mm), so it is below 2^28, and times |dx| it is the same
                 // product as in the other order, below 2^32. (Elsewhere the
-                // other order: the STM32's worst step is 12 instructions
-                // shorter with it, `cargo xtask stm32-report`.)
+                // other order, which the STM32 does in fewer instructions.)
                 let factors = if cfg!(target_arch = "avr") {
                     (t * per_radius_q16, 1)
                 } else {

@@ -71,16 +71,13 @@ pub const FOLLOW_STEP_MM: u16 = 200;
 /// Something this near a sensor face (mm) is in sight of the follower.
 pub const SIGHT_MM: u16 = 300;
 /// The follower's safety net: a boundary followed from one hit point for
-/// this many times the escape's `give_up_steps` ends in "unreachable".
-/// Five seeds of 200 walled worlds (`gen --kind walled`), with the second
-/// round at [`SECOND_GIVE_UPS`]: at 5 (1,000 cycles with the defaults) 993
-/// of the 1,000 are reported unreachable, at 6 986 (and 607 at 12 with a
-/// second round as long: the rest ran out of the simulator's budget first,
-/// the follower going round islands that do not hold the goal). No other
-/// set reaches fewer goals at 5 than at 12; the box worlds report 8
-/// reachable goals unreachable of 1,000 at 5 and 6 (5 at 12), 15 at 4
-/// (the commit history, "Walled worlds"; measured before the circle rule, with
-/// which 996 of the walled runs are reported).
+/// this many times the escape's `give_up_steps` (1,000 cycles with the
+/// defaults) ends in "unreachable". Long enough to go round the boundaries
+/// of the box worlds, short enough that a walled-in goal is reported
+/// before the simulator's budget runs out: with a longer one the follower
+/// goes round islands that do not hold the goal (the walled worlds of
+/// `sim-host/tests/trap_suite.rs` hold it; the commit history, "Walled
+/// worlds", has the sweep).
 pub const BUDGET_GIVE_UPS: u16 = 5;
 /// [`BUDGET_GIVE_UPS`] in the second round, after a first loop handed back
 /// to the potential field (see [`FollowVerdict::Looped`]). That round

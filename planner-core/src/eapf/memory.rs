@@ -95,9 +95,8 @@ impl Span {
     }
 
     /// Whether `p`'s class finds it between robot and target. Always
-    /// inlined, as `axes` is: at opt-level `z` the AVR called it for every
-    /// point of every scan (`cargo xtask avr-report`: 919 cycles off the
-    /// worst step once inlined).
+    /// inlined, as `axes` is: at opt-level `z` the AVR would call it for
+    /// every point of every scan.
     #[inline(always)]
     fn holds(&self, p: &Remembered) -> bool {
         let (in_x, in_y) = self.axes(p.point);
@@ -204,10 +203,9 @@ impl Memory {
 
     /// Make the kept sums those for this robot position and target (a scan
     /// if they are not), in place: the sums are 17 bytes, and on the AVR
-    /// each copy of them is a `memcpy` call (`cargo xtask avr-profile`
-    /// showed one per step from here). Not inlined: the AVR calls it
-    /// either way, and inlined into `remember` it costs the STM32's worst
-    /// step 95 instructions (`cargo xtask stm32-report`).
+    /// each copy of them is a `memcpy` call. Not inlined: the AVR calls it
+    /// either way, and inlined into `remember` it lengthens the STM32's
+    /// worst step.
     #[inline(never)]
     fn keep_sums_at(&mut self, robot: Point, target: Point) {
         if !matches!(&self.sums, Some(s) if s.robot == robot && s.target == target) {

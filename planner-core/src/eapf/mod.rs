@@ -77,8 +77,8 @@ pub struct Planner {
     /// first term; below 2^15 per component, so 16 bits), and the position
     /// they were worked out at: a rover turning in place asks again every
     /// cycle (on the AVR the attraction's sine and cosine are ~1,100
-    /// cycles). Kept as a `Force` instead, the AVR's step cost 251 cycles
-    /// more on average and its text 476 bytes (`cargo xtask avr-report`).
+    /// cycles). In 16 bits, not as a `Force`: on the AVR each copy and
+    /// compare of it is then half the work.
     kept_goal: Option<(Point, u16, Angle, [i16; 2])>,
     /// The midpoint force (eq. 13) and the sums it came from (unchanged
     /// while the rover turns in place and stores no new point).

@@ -408,9 +408,8 @@ impl Reading {
     /// mm: "too close" is one at the face; `None` for "clear" and for a
     /// reading not trusted as an obstacle position. The one place that says
     /// which readings are obstacles (the forces and the boundary follower
-    /// ask it). Always inlined: called out of line on the AVR, the
-    /// collision points' loop cost 200 cycles more a step
-    /// (`cargo xtask avr-report`).
+    /// ask it). Always inlined: out of line on the AVR, the collision
+    /// points' loop would make a call per reading.
     #[inline(always)]
     pub fn obstacle_mm(self) -> Option<u16> {
         match self {
