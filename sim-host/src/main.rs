@@ -194,8 +194,9 @@ enum Cmd {
     },
 }
 
-/// Say that the page `out` was written from `runs` runs since `started`.
-fn wrote(out: &Path, runs: usize, started: std::time::Instant) -> Result<(), String> {
+/// Write `page` to `out` and say so: how many runs it took and how long.
+fn publish(out: &Path, page: &str, runs: usize, started: std::time::Instant) -> Result<(), String> {
+    write(out, page)?;
     say(&format!(
         "wrote {} ({runs} runs in {:.0} s)\n",
         out.display(),
@@ -501,9 +502,8 @@ fn real_main(cli: Cli) -> Result<(), String> {
             for (file, svg) in svgs {
                 write(&pictures.join(file), &svg)?;
             }
-            write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
-            wrote(&out, runs, started)
+            publish(&out, &page, runs, started)
         }
         Cmd::Failures {
             out,
@@ -515,9 +515,8 @@ fn real_main(cli: Cli) -> Result<(), String> {
             let seed = worlds.seed;
             let rows = results::run(&sets, &[planner], seed, seeds, true);
             let page = results::failures_page(&sets, &rows, planner, seed, seeds, &provenance());
-            write(&out, &page)?;
             let runs: usize = rows.iter().map(Vec::len).sum();
-            wrote(&out, runs, started)
+            publish(&out, &page, runs, started)
         }
         Cmd::Faults {
             out,
@@ -529,12 +528,9 @@ fn real_main(cli: Cli) -> Result<(), String> {
             let seed = worlds.seed;
             let rows = results::run_faults(&sets, planner, seed, seeds, true);
             let made = provenance();
-            write(
-                &out,
-                &results::fault_page(&sets, &rows, planner, seed, seeds, &made),
-            )?;
+            let page = results::fault_page(&sets, &rows, planner, seed, seeds, &made);
             let runs: usize = rows.iter().flat_map(|(_, r)| r).map(Vec::len).sum();
-            wrote(&out, runs, started)
+            publish(&out, &page, runs, started)
         }
         Cmd::Gen {
             out,

@@ -102,22 +102,22 @@ pub struct Odometry {
 impl Odometry {
     /// Start at `pose`.
     pub fn new(body: Body, pose: Pose) -> Self {
+        let q12_per_tick = ((body.um_per_tick as i32) * 4_096 + 500) / 1_000;
+        let angle_per_tick = body.angle_per_tick();
+        // A piece of `n` ticks a wheel moves at most n·q12 (1/4,096 mm),
+        // which `mul_q14` takes below 2³¹/2¹⁴ = 131,072; and turns by at
+        // most 2n·angle_per_tick, below 2³¹. Both are positive for every
+        // body `Body::new` accepts.
+        let piece_ticks = (131_071 / q12_per_tick).min(i32::MAX / 2 / angle_per_tick);
         let mut o = Odometry {
             x: 0,
             y: 0,
             heading: 0,
             travelled: 0,
-            q12_per_tick: 0,
-            angle_per_tick: body.angle_per_tick(),
-            piece_ticks: 0,
+            q12_per_tick,
+            angle_per_tick,
+            piece_ticks: piece_ticks.clamp(1, i16::MAX as i32) as u16,
         };
-        o.q12_per_tick = ((body.um_per_tick as i32) * 4_096 + 500) / 1_000;
-        // A piece of `n` ticks a wheel moves at most n·q12 (1/4,096 mm),
-        // which `mul_q14` takes below 2³¹/2¹⁴ = 131,072; and turns by at
-        // most 2n·angle_per_tick, below 2³¹.
-        let by_length = 131_071 / o.q12_per_tick;
-        let by_angle = i32::MAX / 2 / o.angle_per_tick.max(1);
-        o.piece_ticks = by_length.min(by_angle).clamp(1, i16::MAX as i32) as u16;
         o.set_pose(pose);
         o
     }
