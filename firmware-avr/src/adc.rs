@@ -7,8 +7,7 @@
 use crate::board::{steal, Dp};
 use avr_device::interrupt::{self, Mutex};
 use core::cell::Cell;
-use planner_core::eapf::sensors::SENSOR_WARMUP_MS;
-use planner_core::{IrSensors, RawCounts, SENSOR_COUNT};
+use planner_core::{RawCounts, SENSOR_COUNT};
 
 /// Latest counts per channel, and how many full sweeps have completed.
 static LATEST: Mutex<Cell<RawCounts>> = Mutex::new(Cell::new([0; SENSOR_COUNT]));
@@ -64,38 +63,4 @@ pub fn sweeps() -> u16 {
 /// The latest counts of all five channels, read atomically.
 pub fn latest() -> RawCounts {
     interrupt::free(|cs| LATEST.borrow(cs).get())
-}
-
-/// The sensors have not given their first output yet
-/// ([`SENSOR_WARMUP_MS`]): counts read before it are no distances, and
-/// before the first sweep they are the zeros `LATEST` starts with (a
-/// silent sensor: the planner would stop with a sensor fault).
-#[derive(Debug)]
-pub struct Warming;
-
-/// The background sampler as the core's sensor source.
-pub struct BackgroundAdc {
-    /// Past the warm-up (kept: the millisecond clock wraps after 49 days).
-    warm: bool,
-}
-
-impl BackgroundAdc {
-    /// The sampler started by [`start`] at boot.
-    pub fn new() -> Self {
-        BackgroundAdc { warm: false }
-    }
-}
-
-impl IrSensors for BackgroundAdc {
-    type Error = Warming;
-    fn read_raw(&mut self) -> Result<RawCounts, Self::Error> {
-        // Sampling starts at boot and a sweep takes 0.52 ms: past the
-        // warm-up the counts are many sweeps fresh.
-        self.warm = self.warm || crate::clock::millis() >= SENSOR_WARMUP_MS;
-        if self.warm {
-            Ok(latest())
-        } else {
-            Err(Warming)
-        }
-    }
 }

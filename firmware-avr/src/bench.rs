@@ -28,3 +28,14 @@ pub fn start() -> Config {
     init();
     progmem::config()
 }
+
+/// The serial port as a `ufmt` writer, for the benches' text lines.
+pub struct Serial;
+
+impl ufmt::uWrite for Serial {
+    type Error = core::convert::Infallible;
+    fn write_str(&mut self, s: &str) -> Result<(), Self::Error> {
+        serial::write_all(s.as_bytes());
+        Ok(())
+    }
+}

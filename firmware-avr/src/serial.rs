@@ -80,14 +80,3 @@ pub fn write(b: u8) {
     while dp.USART0.ucsr0a().read().bits() & UDRE0 == 0 {}
     dp.USART0.udr0().write(|w| unsafe { w.bits(b) });
 }
-
-/// The serial port as a `ufmt` writer.
-pub struct Serial;
-
-impl ufmt::uWrite for Serial {
-    type Error = core::convert::Infallible;
-    fn write_str(&mut self, s: &str) -> Result<(), Self::Error> {
-        write_all(s.as_bytes());
-        Ok(())
-    }
-}

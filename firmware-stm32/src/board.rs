@@ -19,16 +19,19 @@
 //! Pill all five are on its pin headers.
 
 use core::fmt::Write as _;
-use cortex_m::peripheral::syst::SystClkSource;
+use core::sync::atomic::{AtomicU32, Ordering};
+use cortex_m::peripheral::{syst::SystClkSource, DWT};
+use cortex_m_rt::exception;
 use defmt_rtt as _;
-use micromath::F32Ext;
 use panic_probe as _;
-use planner_core::eapf::sensors::{OneShotSensors, SENSOR_WARMUP_MS};
-use planner_core::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use planner_core::rover::protocol::{self, Request};
-use planner_core::{Angle, IrSensors, Planner, Point, Pose, Status};
+use planner_core::eapf::sensors::OneShotSensors;
+use planner_core::rover::app::{self, Board, Event, Rover, RoverConfig, Sweep};
+use planner_core::rover::drive::Wheels;
+use planner_core::{IrSensors, Planner, Point};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
+use stm32f4xx_hal::pac::USART1;
 use stm32f4xx_hal::qei::Qei;
+use stm32f4xx_hal::serial::{Rx, Tx};
 use stm32f4xx_hal::watchdog::IndependentWatchdog;
 use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 
@@ -36,8 +39,82 @@ use stm32f4xx_hal::{pac, prelude::*, rcc::Config};
 /// mode the timers count 840, so four counts make one core tick.
 const COUNTS_PER_TICK: i32 = 4;
 
+/// Milliseconds since the clock started, counted by SysTick's interrupt.
+static MILLIS: AtomicU32 = AtomicU32::new(0);
+
+#[exception]
+fn SysTick() {
+    MILLIS.fetch_add(1, Ordering::Relaxed);
+}
+
+/// The board's parts as the rover application sees them. The motors,
+/// encoders and sensors are closures over the HAL's drivers, whose types
+/// are long to name.
+struct Parts<M, E, S> {
+    motors: M,
+    encoders: E,
+    sensors: S,
+    tx: Tx<USART1>,
+    rx: Rx<USART1>,
+}
+
+impl<M: FnMut(Wheels), E, S> app::Motors for Parts<M, E, S> {
+    fn set(&mut self, wheels: Wheels) {
+        (self.motors)(wheels);
+    }
+}
+
+impl<M, E: FnMut() -> (i16, i16), S> app::Encoders for Parts<M, E, S> {
+    fn take(&mut self) -> (i16, i16) {
+        (self.encoders)()
+    }
+}
+
+impl<M, E, S: FnMut() -> Sweep> app::Sensors for Parts<M, E, S> {
+    fn sweep(&mut self) -> Sweep {
+        (self.sensors)()
+    }
+}
+
+impl<M, E, S> app::Clock for Parts<M, E, S> {
+    fn millis(&mut self) -> u32 {
+        MILLIS.load(Ordering::Relaxed)
+    }
+    fn cycles(&mut self) -> u32 {
+        DWT::cycle_count()
+    }
+}
+
+impl<M, E, S> app::Serial for Parts<M, E, S> {
+    fn read(&mut self) -> Option<u8> {
+        self.rx.read().ok()
+    }
+    fn write(&mut self, b: u8) {
+        let _ = self.tx.write_char(b as char);
+    }
+}
+
+impl<M: FnMut(Wheels), E: FnMut() -> (i16, i16), S: FnMut() -> Sweep> Board for Parts<M, E, S> {
+    /// Each step and fault, over defmt.
+    fn log(&mut self, event: Event) {
+        match event {
+            Event::Stepped(s) => defmt::info!(
+                "t={=u32}ms pose=({=i16},{=i16})mm heading={=f32}deg -> {} step={=u16}mm cycles={=u32}",
+                s.ms,
+                s.pose.position.x,
+                s.pose.position.y,
+                s.pose.heading.signed() as f32 * (360.0 / 65_536.0),
+                s.output.status,
+                s.output.command.step_mm,
+                s.cycles
+            ),
+            Event::SensorFailed => defmt::error!("adc error: stopped"),
+        }
+    }
+}
+
 pub fn run() -> ! {
-    let (Some(dp), Some(cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
+    let (Some(dp), Some(mut cp)) = (pac::Peripherals::take(), cortex_m::Peripherals::take()) else {
         defmt::panic!("peripherals taken twice")
     };
     let mut rcc = dp.RCC.freeze(Config::hsi().sysclk(84.MHz()));
@@ -45,7 +122,7 @@ pub fn run() -> ! {
     let gpiob = dp.GPIOB.split(&mut rcc);
 
     let adc = Adc::new(dp.ADC1, true, AdcConfig::default(), &mut rcc);
-    let mut sensors = OneShotSensors::new(
+    let mut ir = OneShotSensors::new(
         adc,
         (
             gpioa.pa0.into_analog(),
@@ -55,6 +132,11 @@ pub fn run() -> ! {
             gpiob.pb1.into_analog(),
         ),
     );
+    // A one-shot sweep of the five channels each control tick.
+    let sensors = move || match ir.read_raw() {
+        Ok(raw) => Sweep::New(raw),
+        Err(_) => Sweep::Failed,
+    };
 
     let (_, (ch1, ch2, ..)) = dp.TIM3.pwm_hz(20.kHz(), &mut rcc);
     let mut left_pwm = ch1.with(gpioa.pa6);
@@ -66,7 +148,7 @@ pub fn run() -> ! {
     let mut ain2 = gpiob.pb13.into_push_pull_output();
     let mut bin1 = gpiob.pb14.into_push_pull_output();
     let mut bin2 = gpiob.pb15.into_push_pull_output();
-    let mut drive = |w: Wheels| {
+    let mut motors = move |w: Wheels| {
         left_pwm.set_duty((w.left.unsigned_abs() as i32 * max_duty / 255) as u16);
         right_pwm.set_duty((w.right.unsigned_abs() as i32 * max_duty / 255) as u16);
         ain1.set_state((w.left > 0).into());
@@ -74,13 +156,22 @@ pub fn run() -> ! {
         bin1.set_state((w.right > 0).into());
         bin2.set_state((w.right < 0).into());
     };
-    drive(Wheels::STOP);
+    motors(Wheels::STOP);
 
     let left_enc = Qei::new(dp.TIM4, (gpiob.pb6, gpiob.pb7), &mut rcc);
     // PA15 and PB3 leave their JTAG function (SWD keeps PA13/PA14).
     let (pa15, pb3) = (gpioa.pa15.into_input(), gpiob.pb3.into_input());
     let right_enc = Qei::new(dp.TIM2, (pa15, pb3), &mut rcc);
     let (mut last_l, mut last_r) = (left_enc.count(), right_enc.count() as u16);
+    let encoders = move || {
+        let (l, r) = (left_enc.count(), right_enc.count() as u16);
+        let dl = l.wrapping_sub(last_l) as i16 as i32 / COUNTS_PER_TICK;
+        let dr = r.wrapping_sub(last_r) as i16 as i32 / COUNTS_PER_TICK;
+        // Keep the remainders for the next tick.
+        last_l = last_l.wrapping_add((dl * COUNTS_PER_TICK) as u16);
+        last_r = last_r.wrapping_add((dr * COUNTS_PER_TICK) as u16);
+        (dl as i16, dr as i16)
+    };
 
     let Ok(serial) = dp
         .USART1
@@ -88,129 +179,35 @@ pub fn run() -> ! {
     else {
         defmt::panic!("serial set-up")
     };
-    let (mut tx, mut rx) = serial.split();
+    let (mut tx, rx) = serial.split();
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
     watchdog.start(500.millis());
 
-    // 1 kHz control tick from SysTick (polled).
+    // The cycle counter for the telemetry's step cycles.
+    cp.DCB.enable_trace();
+    cp.DWT.enable_cycle_counter();
+    // The 1 kHz control clock: SysTick's interrupt.
     let mut syst = cp.SYST;
     syst.set_clock_source(SystClkSource::Core);
     syst.set_reload(rcc.clocks.sysclk().raw() / 1_000 - 1);
     syst.clear_current();
+    syst.enable_interrupt();
     syst.enable_counter();
 
     let mut planner = Planner::new(crate::CONFIG, Point::new(0, 0));
-    let mut odometry = Odometry::new(Body::REFERENCE, Pose::default());
-    let mut executor = Executor::new(ExecutorConfig::default());
-    let mut driving = false;
-    let mut lines = protocol::LineReader::new();
-    let mut ms: u32 = 0;
-    let mut warm = false;
-    // The counts of the last tick (`None` after an ADC error), for `D`.
-    let mut last_raw = None;
+    let mut rover = Rover::new(&mut planner, RoverConfig::REFERENCE);
     defmt::info!("ready");
     let _ = tx.write_str("READY\n");
-
+    let mut parts = Parts {
+        motors,
+        encoders,
+        sensors,
+        tx,
+        rx,
+    };
     loop {
         watchdog.feed();
-        while let Ok(b) = rx.read() {
-            let Some(req) = lines.feed(b, ms) else {
-                continue;
-            };
-            let reply = match req {
-                Some(Request::Goal(x, y)) => {
-                    planner.set_goal(Point::new(x, y));
-                    executor.halt();
-                    driving = true;
-                    "OK\n"
-                }
-                Some(Request::Pose(x, y, deg)) if !driving => {
-                    odometry.set_pose(Pose {
-                        position: Point::new(x, y),
-                        heading: Angle::from_deg(deg),
-                    });
-                    "OK\n"
-                }
-                Some(Request::Stop) => {
-                    executor.halt();
-                    driving = false;
-                    "OK\n"
-                }
-                // Not a command: it may have been a stop (`protocol`).
-                None => {
-                    executor.halt();
-                    driving = false;
-                    "ERR\n"
-                }
-                // The counts, then what the planner reads from each.
-                Some(Request::Sensors) => match last_raw {
-                    Some(raw) => {
-                        protocol::write_sensor_line(planner.config(), &raw, |b| {
-                            let _ = tx.write_char(b as char);
-                        });
-                        ""
-                    }
-                    None => "ERR\n",
-                },
-                _ => "ERR\n",
-            };
-            let _ = tx.write_str(reply);
-        }
-
-        if !syst.has_wrapped() {
-            continue;
-        }
-        ms = ms.wrapping_add(1);
-        let (l, r) = (left_enc.count(), right_enc.count() as u16);
-        let dl = l.wrapping_sub(last_l) as i16 as i32 / COUNTS_PER_TICK;
-        let dr = r.wrapping_sub(last_r) as i16 as i32 / COUNTS_PER_TICK;
-        // Keep the remainders for the next tick.
-        last_l = last_l.wrapping_add((dl * COUNTS_PER_TICK) as u16);
-        last_r = last_r.wrapping_add((dr * COUNTS_PER_TICK) as u16);
-        odometry.update(dl as i16, dr as i16);
-        // No step before the sensors' first output (kept once past: `ms`
-        // wraps after 49 days).
-        warm = warm || ms >= SENSOR_WARMUP_MS;
-        // Every tick, driving or not: `D` prints the last counts.
-        let read = sensors.read_raw();
-        last_raw = read.as_ref().ok().copied();
-        if !driving || !warm {
-            drive(Wheels::STOP);
-            continue;
-        }
-        let pose = odometry.pose();
-        let Ok(raw) = read else {
-            // An ADC error is a sensor fault: stop.
-            driving = false;
-            drive(Wheels::STOP);
-            defmt::error!("adc error: stopped");
-            continue;
-        };
-        if executor.is_idle() {
-            let out = planner.step_raw(pose, &raw);
-            let (dx, dy) = pose.position.to(planner.goal());
-            let to_goal_m = ((dx * dx + dy * dy) as f32).sqrt() / 1000.0;
-            defmt::info!(
-                "t={=u32}ms pose=({=i16},{=i16})mm heading={=f32}deg to_goal={=f32}m -> {} step={=u16}mm",
-                ms,
-                pose.position.x,
-                pose.position.y,
-                pose.heading.signed() as f32 * (360.0 / 65_536.0),
-                to_goal_m,
-                out.status,
-                out.command.step_mm
-            );
-            if out.status != Status::Moving {
-                driving = false;
-                drive(Wheels::STOP);
-                continue;
-            }
-            executor.start(out.command);
-        }
-        let wheels = executor.tick(pose, odometry.travelled_mm(), |remaining| {
-            planner.guard_raw(&raw, remaining)
-        });
-        drive(wheels);
+        rover.poll(&mut parts);
     }
 }

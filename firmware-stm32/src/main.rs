@@ -6,8 +6,9 @@
 //!
 //! - `board` (default): the real rover — 12-bit ADC on PA0–PA4 through the
 //!   core's embedded-hal 0.2 adapter, TIM3 PWM for the motors, TIM4 and TIM2
-//!   in encoder mode, the turn-then-advance executor with the core's guard,
-//!   goals over USART1, defmt logs over RTT, independent watchdog. Pin map in
+//!   in encoder mode, USART1, SysTick and the cycle counter, wired to the
+//!   core's rover application (`planner_core::rover::app`, the same as the
+//!   ATmega328P's); defmt logs over RTT, independent watchdog. Pin map in
 //!   [`board`].
 //! - `qemu`: for `qemu-system-arm -M netduinoplus2` (an STM32F405, same
 //!   Cortex-M4F), which has no RCC, a fake ADC and a cycle counter that
@@ -17,8 +18,7 @@
 //!
 //! Crates: `cortex-m-rt` (start-up, vector table), `stm32f4xx-hal` pinned at
 //! 0.23.0 (its API changes between minors), `defmt` for logs (compact: the
-//! strings stay on the host), `micromath` for the float conveniences of the
-//! telemetry (never in the planner).
+//! strings stay on the host).
 #![no_std]
 #![no_main]
 

@@ -254,7 +254,6 @@ pub(crate) const fn in_range(v: i32, lo: i32, hi: i32) -> bool {
 }
 
 /// `a · b` where one of them is Q14, rounded; `|a · b| < 2^31`.
-#[inline]
 pub const fn mul_q14(a: i32, b: i32) -> i32 {
     (a * b + (1 << 13)) >> 14
 }
@@ -345,6 +344,7 @@ impl Point {
 }
 
 /// Saturating conversion to `i16`.
+#[cfg_attr(target_arch = "avr", inline(never))]
 pub fn sat_i16(v: i32) -> i16 {
     v.clamp(i16::MIN as i32, i16::MAX as i32) as i16
 }
@@ -552,6 +552,7 @@ impl Force {
 /// below 91 mm (closer than any IR reading can place an obstacle from the
 /// robot's centre) is treated as 91 mm, ~124 force units, which keeps the
 /// magnitude inside [`MAX_SCALED`].
+#[cfg_attr(target_arch = "avr", inline(never))]
 pub fn inverse_square_force(d_mm: u16) -> i32 {
     const _: () = assert!(1_024_000_000 / (91 * 91) <= MAX_SCALED);
     let d = d_mm.max(91) as u32;

@@ -33,13 +33,13 @@ mod progmem;
 #[allow(dead_code)]
 mod serial;
 
+use bench::Serial;
 use core::hint::black_box;
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::eapf::command::free_distance_mm;
 use planner_core::eapf::escape::{Escape, VIRTUAL_CAPACITY};
 use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{Angle, Reading};
-use serial::Serial;
 use ufmt::uwriteln;
 
 #[panic_handler]

@@ -117,7 +117,7 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 #[avr_device::entry]
 fn main() -> ! {
     let cfg = bench::start();
-    let mut out = serial::Serial;
+    let mut out = bench::Serial;
     let _ = uwriteln!(out, "READY");
     let mut lines = protocol::LineReader::new();
     loop {

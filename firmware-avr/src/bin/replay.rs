@@ -75,7 +75,7 @@ fn main() -> ! {
     // Built in place and loaded out of flash, as the firmware does.
     let mut planner = Planner::new(Config::UNSET, Point::new(0, 0));
     planner.load_config(progmem::load_config);
-    let mut out = serial::Serial;
+    let mut out = bench::Serial;
     let _ = uwriteln!(out, "READY");
     let mut lines = protocol::LineReader::new();
     loop {

@@ -317,6 +317,7 @@ impl Flank {
     }
 
     /// The cycle commanded `step_mm` along `heading` (0: none).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub(crate) fn start(&mut self, heading: Angle, step_mm: u16) {
         self.advance = if step_mm > 0 {
             Some((heading, step_mm))
@@ -403,6 +404,7 @@ impl Flank {
     /// One beam's point `at`, `distance_mm` from the centre `robot`, read
     /// as `r`: kept as [`Flank::saw_near`] keeps it.
     #[cfg(feature = "set-back")]
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub(crate) fn saw_point(
         &mut self,
         cfg: &Config,

@@ -270,6 +270,7 @@ impl Law {
 
     /// Whether this is the law of `cfg` (a drop works it out again only
     /// when not: two divisions and a search saved on every later drop).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn is_of(&self, cfg: &EscapeConfig) -> bool {
         self.radius_mm == cfg.radius_mm && self.k_v == cfg.k_v
     }
@@ -335,12 +336,14 @@ fn eighths(rim: u16, weight: u8, lo: u32, hi: u32) -> u32 {
 
 /// `16·w·p`, the least `h³` a reach of `h` eighths of `V_r` needs:
 /// `(h/8)³·32 ≥ w·p` ⇔ `h³ ≥ 16·w·p`; `w·p < 2^24`, so both sides < 2^30.
+#[cfg_attr(target_arch = "avr", inline(never))]
 fn need(rim: u16, weight: u8) -> u32 {
     const _: () = assert!(VIRTUAL_MIN_PUSH == 32);
     16 * rim as u32 * weight as u32
 }
 
 /// `h` eighths of `V_r` = `v_r` mm, rounded up, at most 32,767 mm.
+#[cfg_attr(target_arch = "avr", inline(never))]
 fn reach_of(v_r: u32, h: u32) -> u16 {
     (v_r * h).div_ceil(8).min(i16::MAX as u32) as u16
 }
@@ -419,7 +422,7 @@ impl Escape {
     /// Account for one planner cycle with the rover at `robot`, `goal_mm`
     /// from the goal.
     ///
-    /// Out of line on the AVR, as [`crate::eapf::forces::collision_points`] is.
+    /// Out of line on the AVR (docs/performance.md, "Inlining on the AVR").
     #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn observe(&mut self, cfg: &EscapeConfig, robot: Point, goal_mm: u16) -> Verdict {
         if !cfg.enabled {
@@ -474,6 +477,7 @@ impl Escape {
     /// Whether `robot` is within `r_mm` of a breadcrumb other than the two
     /// newest. Runs every cycle over the whole trail: plain loops over the
     /// deque's two slices.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn revisits(&self, robot: Point, r_mm: u16) -> bool {
         let old = self.crumbs.len().saturating_sub(2);
         let (a, b) = self.crumbs.as_slices();
@@ -604,6 +608,7 @@ impl Escape {
     /// [`Escape::force`] for the planner: the answer is kept, and given
     /// again while the rover stands where it stood, facing the same goal
     /// bearing, and no obstacle has been dropped.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub(crate) fn force_kept(&mut self, robot: Point, bearing: Angle) -> Force {
         match self.kept_force {
             Some((at, b, f)) if at == robot && b == bearing => f,

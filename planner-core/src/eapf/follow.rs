@@ -156,6 +156,7 @@ pub struct Follow {
 
 impl Follow {
     /// Whether the rover seeks or follows a boundary (the escape gave up).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn active(&self) -> bool {
         self.side != 0
     }
@@ -183,6 +184,7 @@ impl Follow {
 
     /// A turn to the sector's edge away from the boundary's side (what a
     /// blocked way calls for).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn away_turn(&self, cfg: &Config) -> Angle {
         let half = cfg.sector_half_width();
         if self.side > 0 {
@@ -195,6 +197,7 @@ impl Follow {
     /// One cycle at `robot`, `goal_mm` from the goal whose bearing is
     /// `bearing_rel` off the heading, the way towards it free for
     /// `free_to_goal_mm` (0 outside the sensed sector).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn decide(
         &mut self,
         cfg: &Config,
@@ -469,6 +472,7 @@ fn side_of(readings: &Readings, bearing_rel: Angle) -> i8 {
 }
 
 /// `v` clamped to ±(2^14 − 1).
+#[cfg_attr(target_arch = "avr", inline(never))]
 fn clamp14(v: i32) -> i32 {
     v.clamp(-16_383, 16_383)
 }

@@ -30,11 +30,6 @@ pub fn obstacle_distance_mm(cfg: &Config, r: Reading) -> Option<u16> {
 /// Collision points (eqs. 7, 8): a detection at distance `D` from the centre
 /// along sensor angle `θs` counts when `D·|sin θs| ≤ radius + clearance`
 /// (inside the corridor, with our safety margin) and `D·cos θs ≤ step`.
-///
-/// Out of line on the AVR (with `off_sensor`, `Memory::remember` and
-/// `Escape::observe`): inlined, the step's frame spills past the 63 bytes
-/// one load reaches (docs/performance.md, "Memory layout on the AVR").
-#[cfg_attr(target_arch = "avr", inline(never))]
 pub fn collision_points(
     cfg: &Config,
     readings: &Readings,
@@ -131,9 +126,6 @@ pub fn sensor_group(m: Motion) -> &'static [usize] {
 /// Off-sensor attractive force (eqs. 14, 15): `ξ Σ SC_i · unit(P_Sen_i − P_R)`
 /// over the chosen group, `SC_i = 1` when sensor i sees nothing. The end of
 /// a sensor's range lies along its axis, so the unit vector is exact.
-///
-/// Out of line on the AVR, as [`collision_points`] is.
-#[cfg_attr(target_arch = "avr", inline(never))]
 pub fn off_sensor(cfg: &Config, heading: Dir, group: Motion, readings: &Readings) -> Force {
     let mut f = Force::ZERO;
     for &i in sensor_group(group) {

@@ -248,7 +248,7 @@ impl Memory {
     /// sums when the robot has moved since they were kept (the midpoint
     /// needs that scan this cycle anyway).
     ///
-    /// Out of line on the AVR, as [`crate::eapf::forces::collision_points`] is.
+    /// Out of line on the AVR (docs/performance.md, "Inlining on the AVR").
     #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn remember(
         &mut self,

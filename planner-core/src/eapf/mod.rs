@@ -241,6 +241,7 @@ impl Planner {
 
     /// One planner cycle from raw ADC counts (the entry point every front
     /// end shares).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn step_raw(&mut self, pose: Pose, raw: &RawCounts) -> Output {
         // Whether last cycle's step moved the rover, or the guard stopped it
         // before it began (see the pocket rule below).
@@ -582,6 +583,7 @@ impl Planner {
     /// Add this cycle's `turn` to the turning on the spot (restarted once a
     /// step has `moved` the rover): the pocket rule and the fold-back
     /// filter's `held` read it, while following a boundary too.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn count_turn(turned_in_place: &mut u32, moved: bool, turn: Angle) {
         if moved {
             *turned_in_place = 0;

@@ -139,7 +139,9 @@ impl Odometry {
         let most = self.piece_ticks as i32;
         let (mut left, mut right) = (left as i32, right as i32);
         loop {
-            let (l, r) = (left.clamp(-most, most), right.clamp(-most, most));
+            // `max` then `min`, not `clamp`: bounds held in a field are not
+            // known to be ordered, and `clamp` would link a panic.
+            let (l, r) = (left.max(-most).min(most), right.max(-most).min(most));
             self.integrate(l, r);
             (left, right) = (left - l, right - r);
             if left == 0 && right == 0 {
@@ -150,6 +152,7 @@ impl Odometry {
 
     /// One piece of [`Odometry::update`]: `left` and `right` at most
     /// `piece_ticks` each.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn integrate(&mut self, left: i32, right: i32) {
         if left == 0 && right == 0 {
             return;
@@ -219,17 +222,22 @@ pub struct ExecutorConfig {
     pub settle_ticks: u16,
 }
 
+impl ExecutorConfig {
+    /// The reference rover's.
+    pub const DEFAULT: ExecutorConfig = ExecutorConfig {
+        turn_tolerance: Angle::from_decideg(10),
+        turn_duty: (160, 60),
+        advance_duty: (220, 70),
+        hold_gain: 12,
+        slow_mm: 40,
+        // 1 ms ticks in both firmwares: the sensors' longest period.
+        settle_ticks: 48,
+    };
+}
+
 impl Default for ExecutorConfig {
     fn default() -> Self {
-        ExecutorConfig {
-            turn_tolerance: Angle::from_decideg(10),
-            turn_duty: (160, 60),
-            advance_duty: (220, 70),
-            hold_gain: 12,
-            slow_mm: 40,
-            // 1 ms ticks in both firmwares: the sensors' longest period.
-            settle_ticks: 48,
-        }
+        ExecutorConfig::DEFAULT
     }
 }
 
@@ -288,6 +296,7 @@ impl Executor {
     }
 
     /// Take a new command (replaces any command in progress).
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn start(&mut self, command: Command) {
         self.phase = Phase::Turn {
             heading: command.heading,
@@ -336,7 +345,11 @@ impl Executor {
                     spun: true,
                 };
                 // Duty proportional to the error (1 duty per 0.35°), bounded.
-                let duty = ((err.abs_signed() >> 6) as i16).clamp(c.turn_duty.1, c.turn_duty.0);
+                // `max` then `min`: a configuration's bounds may be in
+                // either order, and `clamp` would panic.
+                let duty = ((err.abs_signed() >> 6) as i16)
+                    .max(c.turn_duty.1)
+                    .min(c.turn_duty.0);
                 if err.signed() > 0 {
                     Wheels {
                         left: -duty,

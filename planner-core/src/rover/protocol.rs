@@ -31,8 +31,8 @@
 //!
 //! A line that is not a command gets `ERR` and stops the rover; a command
 //! refused in the state the rover is in (`P` while driving) gets `ERR`
-//! alone. Telemetry (the AVR's; the STM32 logs over
-//! defmt instead), one line per planner step:
+//! alone. Telemetry, one line per planner step (the STM32 also logs each
+//! step over defmt):
 //! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
 //! with headings in binary angle units (65,536 = 360°) and status one of
 //! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault);
@@ -150,41 +150,51 @@ pub fn sensor_readings<'a>(
 /// time to `out`, numbers by [`write_number`]: what the STM32 sends, and
 /// what the tests hold the AVR's line (numbers by ufmt, which its telemetry
 /// links already) to.
-pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, mut out: impl FnMut(u8)) {
+pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, out: &mut dyn FnMut(u8)) {
     out(b'D');
     for &c in raw {
         out(b' ');
-        write_number(c, &mut out);
+        write_number(c.into(), out);
     }
     for f in sensor_readings(cfg, raw) {
         out(b' ');
         match f {
-            SensorField::Number(n) => write_number(n, &mut out),
+            SensorField::Number(n) => write_number(n.into(), out),
             SensorField::Sign(c) => out(c),
         }
     }
     out(b'\n');
 }
 
-/// `v` in decimal, a byte at a time to `out`: for a firmware without an
-/// integer formatter of its own (the STM32's; `core::fmt`'s costs
-/// kilobytes of flash). No buffer, no index.
-pub fn write_number(v: u16, mut out: impl FnMut(u8)) {
-    // The largest power of ten not above `v` (1 for 0), then a digit per
-    // power.
-    let mut p: u16 = 1;
+/// `v` in decimal, a byte at a time to `out`: the firmwares' one integer
+/// formatter (`core::fmt`'s costs kilobytes of flash). The largest power of
+/// ten not above `v` first, then a digit per power: no buffer, no index, no
+/// recursion (the stack bound needs none). `dyn`, so that an image holds one
+/// copy whatever it writes to.
+pub fn write_number(v: u32, out: &mut dyn FnMut(u8)) {
+    let mut p: u32 = 1;
     while p <= v / 10 {
         p *= 10;
     }
     let mut rest = v;
     loop {
-        out(b'0' + (rest / p) as u8);
-        rest %= p;
+        // `p` is never 0 (a power of ten at most `v`); `checked_` keeps
+        // the image free of a panic path the compiler cannot rule out.
+        out(b'0' + rest.checked_div(p).unwrap_or(0) as u8);
+        rest = rest.checked_rem(p).unwrap_or(0);
         if p == 1 {
             break;
         }
         p /= 10;
     }
+}
+
+/// `v` in decimal, `-` first if negative.
+pub fn write_signed(v: i16, out: &mut dyn FnMut(u8)) {
+    if v < 0 {
+        out(b'-');
+    }
+    write_number(v.unsigned_abs().into(), out);
 }
 
 /// A pause inside a line longer than this, ms, drops the bytes before it.
@@ -281,7 +291,7 @@ mod tests {
     #[test]
     fn numbers_are_written_in_decimal() {
         for v in [
-            0u16,
+            0u32,
             1,
             9,
             10,
@@ -292,10 +302,17 @@ mod tests {
             9_999,
             10_000,
             60_001,
-            u16::MAX,
+            u16::MAX.into(),
+            1_000_000_007,
+            u32::MAX,
         ] {
             let mut got = std::vec::Vec::new();
-            write_number(v, |b| got.push(b));
+            write_number(v, &mut |b| got.push(b));
+            assert_eq!(got, v.to_string().into_bytes());
+        }
+        for v in [i16::MIN, -32_767, -1_000, -1, 0, 7, i16::MAX] {
+            let mut got = std::vec::Vec::new();
+            write_signed(v, &mut |b| got.push(b));
             assert_eq!(got, v.to_string().into_bytes());
         }
     }
@@ -303,7 +320,7 @@ mod tests {
     /// The line as the STM32 writes it.
     fn line(cfg: &Config, raw: &RawCounts) -> std::string::String {
         let mut got = std::vec::Vec::new();
-        write_sensor_line(cfg, raw, |b| got.push(b));
+        write_sensor_line(cfg, raw, &mut |b| got.push(b));
         std::string::String::from_utf8(got).unwrap()
     }
 

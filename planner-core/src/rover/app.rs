@@ -1,0 +1,697 @@
+//! The rover application both firmwares run, as one state machine over the
+//! board's parts: the serial requests of [`protocol`], the sensors'
+//! warm-up, the turn-then-advance [`Executor`] with the planner's guard
+//! during each advance, the telemetry line, and the stop on a fault.
+//!
+//! A firmware wires its drivers to five small traits ([`Motors`],
+//! [`Encoders`], [`Sensors`], [`Clock`], [`Serial`]; [`Board`] gathers
+//! them) and calls [`Rover::poll`] from its main loop, as often as it can.
+//! The host tests drive the same code with mock parts.
+//!
+//! Each poll has two phases:
+//! 1. **requests**: every byte received goes to the [`LineReader`]; each
+//!    whole line is answered (`OK`, `ERR`, `D …`, `M …`);
+//! 2. **control tick**, once per millisecond of the board's clock: the
+//!    encoders' ticks into the odometry, the sensors' latest sweep, then
+//!    - stopped: motors off;
+//!    - idle executor: a planner step on the latest counts, its telemetry
+//!      line, and either the next command or a stop (arrived, unreachable,
+//!      sensor fault);
+//!    - turning or advancing: the executor's duties, the guard looking at
+//!      each new sweep at most every [`RoverConfig::guard_period_ms`].
+
+use crate::eapf::command::{Guard, Output, Status};
+use crate::eapf::sensors::{RawCounts, SENSOR_WARMUP_MS};
+use crate::eapf::Planner;
+use crate::fixed::{Angle, Point, Pose};
+use crate::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
+use crate::rover::protocol::{self, LineReader, Request};
+use core::sync::atomic::{compiler_fence, Ordering};
+
+/// The two motors.
+pub trait Motors {
+    /// Drive the wheels at these duties (both 0: motors off).
+    fn set(&mut self, wheels: Wheels);
+}
+
+/// The two wheel encoders.
+pub trait Encoders {
+    /// Ticks of each wheel (left, right; forward positive) since the last
+    /// call.
+    fn take(&mut self) -> (i16, i16);
+}
+
+/// What the sensors have for a control tick.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Sweep {
+    /// No new sweep since the last call.
+    Same,
+    /// A sweep of all five channels completed since the last call.
+    New(RawCounts),
+    /// The converter failed: a sensor fault.
+    Failed,
+}
+
+/// The five IR sensors behind their ADC.
+pub trait Sensors {
+    /// The latest sweep, if one completed since the last call.
+    fn sweep(&mut self) -> Sweep;
+}
+
+/// Time since power-up.
+pub trait Clock {
+    /// Milliseconds (may wrap).
+    fn millis(&mut self) -> u32;
+    /// A free-running cycle counter, for the telemetry's step cycles (0
+    /// where the board has none).
+    fn cycles(&mut self) -> u32 {
+        0
+    }
+}
+
+/// The serial port of [`protocol`].
+pub trait Serial {
+    /// A received byte, if any (never blocks).
+    fn read(&mut self) -> Option<u8>;
+    /// Send one byte.
+    fn write(&mut self, b: u8);
+}
+
+/// Every part the application drives, and what a board can report.
+pub trait Board: Motors + Encoders + Sensors + Clock + Serial {
+    /// The most stack used so far, bytes, for `M` (`None` answers `ERR`).
+    fn stack_peak(&self) -> Option<u16> {
+        None
+    }
+    /// Told what the application did, for a log (the STM32's defmt).
+    fn log(&mut self, event: Event) {
+        let _ = event;
+    }
+}
+
+/// How the rover drives.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct RoverConfig {
+    /// The wheels and encoders.
+    pub body: Body,
+    /// The turn-then-advance executor.
+    pub executor: ExecutorConfig,
+    /// Least time between two guard looks, ms. A look costs about a 1 ms
+    /// tick on the ATmega328P; the sensors give a new sweep every ~38 ms
+    /// and the rover covers 1.4 mm in 4 ms at full speed.
+    pub guard_period_ms: u16,
+}
+
+impl RoverConfig {
+    /// The reference rover ([`Body::REFERENCE`]), the default executor,
+    /// a guard look every 4 ms.
+    pub const REFERENCE: RoverConfig = RoverConfig {
+        body: Body::REFERENCE,
+        executor: ExecutorConfig::DEFAULT,
+        guard_period_ms: 4,
+    };
+}
+
+/// A planner step as it ran.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Step {
+    /// When, ms.
+    pub ms: u32,
+    /// The pose it planned from.
+    pub pose: Pose,
+    /// What the planner answered.
+    pub output: Output,
+    /// Its cycles, by [`Clock::cycles`] (interrupts during it included).
+    pub cycles: u32,
+}
+
+/// What the application tells [`Board::log`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Event {
+    /// The planner stepped.
+    Stepped(Step),
+    /// The sensors failed while driving: stopped.
+    SensorFailed,
+}
+
+/// The application: planner, odometry, executor and request reader.
+#[derive(Debug)]
+pub struct Rover<'p> {
+    /// Borrowed, not owned: a firmware builds its planner in place (on the
+    /// ATmega328P a move is a second 1 KB copy on the stack).
+    planner: &'p mut Planner,
+    odometry: Odometry,
+    executor: Executor,
+    lines: LineReader,
+    guard_period_ms: u16,
+    driving: bool,
+    /// The sensors have given their first output (kept once past: the
+    /// clock wraps after 49 days).
+    warm: bool,
+    /// The last control tick, ms.
+    last_tick_ms: u32,
+    /// The last guard look, ms.
+    last_guard_ms: u32,
+    /// The latest sweep (`None` before the first and after a failure).
+    counts: Option<RawCounts>,
+    /// The latest sweep came after the guard's last look.
+    unseen: bool,
+}
+
+impl<'p> Rover<'p> {
+    /// A stopped rover at the origin, heading 0, planning with `planner`.
+    pub fn new(planner: &'p mut Planner, cfg: RoverConfig) -> Self {
+        Rover {
+            planner,
+            odometry: Odometry::new(cfg.body, Pose::default()),
+            executor: Executor::new(cfg.executor),
+            lines: LineReader::new(),
+            guard_period_ms: cfg.guard_period_ms,
+            driving: false,
+            warm: false,
+            last_tick_ms: 0,
+            last_guard_ms: 0,
+            counts: None,
+            unseen: false,
+        }
+    }
+
+    /// Drive to `goal` (what `G` does): forget the map, start driving.
+    pub fn go(&mut self, goal: Point) {
+        self.planner.set_goal(goal);
+        self.executor.halt();
+        self.driving = true;
+    }
+
+    /// Is it driving to a goal?
+    pub fn is_driving(&self) -> bool {
+        self.driving
+    }
+
+    /// The odometry's pose.
+    pub fn pose(&self) -> Pose {
+        self.odometry.pose()
+    }
+
+    /// The planner.
+    pub fn planner(&self) -> &Planner {
+        self.planner
+    }
+
+    /// Answer the requests received, then run the control tick if the
+    /// board's clock has moved on since the last.
+    pub fn poll(&mut self, board: &mut impl Board) {
+        let now = board.millis();
+        while let Some(b) = board.read() {
+            if let Some(req) = self.lines.feed(b, now) {
+                self.answer(board, req);
+            }
+        }
+        if now != self.last_tick_ms {
+            self.last_tick_ms = now;
+            self.tick(board, now);
+        }
+    }
+
+    fn stop(&mut self, board: &mut impl Board) {
+        self.executor.halt();
+        self.driving = false;
+        board.set(Wheels::STOP);
+    }
+
+    /// Answer one line (`None`: not a command).
+    #[inline(never)]
+    fn answer(&mut self, board: &mut impl Board, req: Option<Request>) {
+        let reply: &[u8] = match req {
+            Some(Request::Goal(x, y)) => {
+                self.go(Point::new(x, y));
+                b"OK\n"
+            }
+            Some(Request::Pose(x, y, deg)) if !self.driving => {
+                self.odometry.set_pose(Pose {
+                    position: Point::new(x, y),
+                    heading: Angle::from_deg(deg),
+                });
+                b"OK\n"
+            }
+            Some(Request::Stop) => {
+                self.stop(board);
+                b"OK\n"
+            }
+            // Not a command: it may have been a stop (`protocol`).
+            None => {
+                self.stop(board);
+                b"ERR\n"
+            }
+            Some(Request::Sensors) => match self.counts {
+                Some(raw) => {
+                    protocol::write_sensor_line(self.planner.config(), &raw, &mut sink(board));
+                    return;
+                }
+                None => b"ERR\n",
+            },
+            Some(Request::Memory) => match board.stack_peak() {
+                Some(peak) => {
+                    write_bytes(board, b"M stack_peak=");
+                    protocol::write_number(peak.into(), &mut sink(board));
+                    board.write(b'\n');
+                    return;
+                }
+                None => b"ERR\n",
+            },
+            // `P` while driving; `R` (the replay binary's).
+            Some(Request::Pose(..) | Request::Replay(..)) => b"ERR\n",
+        };
+        write_bytes(board, reply);
+    }
+
+    /// One control tick at `now`, ms.
+    fn tick(&mut self, board: &mut impl Board, now: u32) {
+        let (left, right) = board.take();
+        self.odometry.update(left, right);
+        self.warm = self.warm || now >= SENSOR_WARMUP_MS;
+        if !self.take_sweep(board) && self.driving {
+            self.stop(board);
+            board.log(Event::SensorFailed);
+            return;
+        }
+        if !self.driving {
+            board.set(Wheels::STOP);
+            return;
+        }
+        let pose = self.odometry.pose();
+        if self.executor.is_idle() {
+            let (true, Some(raw)) = (self.warm, &self.counts) else {
+                // Warming up: wait, motors off.
+                board.set(Wheels::STOP);
+                return;
+            };
+            let (output, cycles) = timed_step(self.planner, board, pose, raw);
+            let step = Step {
+                ms: now,
+                pose,
+                output,
+                cycles,
+            };
+            write_telemetry(&mut sink(board), &step);
+            board.log(Event::Stepped(step));
+            if step.output.status != Status::Moving {
+                // Arrived, unreachable or a sensor fault: safe stop.
+                self.stop(board);
+                return;
+            }
+            self.executor.start(step.output.command);
+        }
+        let wheels = self.advance(now, pose);
+        board.set(wheels);
+    }
+
+    /// Keep the latest sweep; `false` if the sensors failed.
+    fn take_sweep(&mut self, board: &mut impl Board) -> bool {
+        match board.sweep() {
+            Sweep::Same => true,
+            Sweep::New(raw) => {
+                self.counts = Some(raw);
+                self.unseen = true;
+                true
+            }
+            Sweep::Failed => {
+                self.counts = None;
+                false
+            }
+        }
+    }
+
+    /// The executor's duties; the guard looks at a sweep it has not seen
+    /// when a look is due.
+    #[inline(never)]
+    fn advance(&mut self, now: u32, pose: Pose) -> Wheels {
+        let due =
+            self.unseen && now.wrapping_sub(self.last_guard_ms) >= self.guard_period_ms.into();
+        let (planner, counts) = (&mut *self.planner, &self.counts);
+        let (unseen, last_guard_ms) = (&mut self.unseen, &mut self.last_guard_ms);
+        self.executor
+            .tick(pose, self.odometry.travelled_mm(), |remaining_mm| {
+                match (due, counts) {
+                    (true, Some(raw)) => {
+                        *unseen = false;
+                        *last_guard_ms = now;
+                        planner.guard_raw(raw, remaining_mm)
+                    }
+                    _ => Guard::Continue,
+                }
+            })
+    }
+}
+
+/// A planner step and its cycles. The fences and `black_box`es keep the
+/// compiler from moving work across the two cycle reads.
+#[inline(never)]
+fn timed_step(
+    planner: &mut Planner,
+    clock: &mut impl Clock,
+    pose: Pose,
+    raw: &RawCounts,
+) -> (Output, u32) {
+    let t0 = clock.cycles();
+    compiler_fence(Ordering::SeqCst);
+    let output = planner.step_raw(core::hint::black_box(pose), core::hint::black_box(raw));
+    let output = core::hint::black_box(output);
+    compiler_fence(Ordering::SeqCst);
+    (output, clock.cycles().wrapping_sub(t0))
+}
+
+/// The board's serial output as the one closure type that the writers of
+/// [`protocol`] take (`dyn`: an image holds one copy of each writer, and of
+/// the closure's table, which the AVR keeps in RAM).
+fn sink(board: &mut impl Serial) -> impl FnMut(u8) + '_ {
+    move |b| board.write(b)
+}
+
+fn write_bytes(board: &mut impl Serial, bytes: &[u8]) {
+    for &b in bytes {
+        board.write(b);
+    }
+}
+
+/// The status's letter in the telemetry line.
+pub fn status_letter(s: Status) -> u8 {
+    match s {
+        Status::Moving => b'M',
+        Status::Arrived => b'A',
+        Status::Unreachable => b'U',
+        Status::SensorFault => b'F',
+    }
+}
+
+/// A space, then `v` in decimal.
+fn write_field(out: &mut dyn FnMut(u8), v: u32) {
+    out(b' ');
+    protocol::write_number(v, out);
+}
+
+/// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
+/// ([`protocol`]), a byte at a time to `out`.
+fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step) {
+    let position = step.pose.position;
+    let command = step.output.command;
+    out(b'T');
+    write_field(out, step.ms);
+    for v in [position.x, position.y] {
+        out(b' ');
+        protocol::write_signed(v, out);
+    }
+    write_field(out, step.pose.heading.0.into());
+    out(b' ');
+    out(status_letter(step.output.status));
+    write_field(out, command.heading.0.into());
+    write_field(out, command.step_mm.into());
+    write_field(out, step.cycles);
+    out(b'\n');
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::eapf::config::ConfigBuilder;
+    use crate::eapf::sensors::{AdcProfile, Reading};
+    use std::string::String;
+    use std::vec::Vec;
+
+    /// Counts that read "nothing in range", with a little noise.
+    const CLEAR: u16 = 57;
+
+    /// A rover in open space: the wheels turn the encoders as commanded
+    /// (no slip), the sensors see nothing and sweep every 38 ms, bytes
+    /// arrive when the test queues them.
+    struct Mock {
+        ms: u32,
+        wheels: Wheels,
+        /// Duty accumulated, per wheel, towards the next tick.
+        acc: (i32, i32),
+        /// What the sensors give from this time on, ms: counts, or a failure.
+        fault_at_ms: Option<(u32, Option<u16>)>,
+        sweeps: u32,
+        rx: Vec<u8>,
+        tx: Vec<u8>,
+        events: Vec<Event>,
+    }
+
+    impl Mock {
+        fn new() -> Self {
+            Mock {
+                ms: 0,
+                wheels: Wheels::STOP,
+                acc: (0, 0),
+                fault_at_ms: None,
+                sweeps: 0,
+                rx: Vec::new(),
+                tx: Vec::new(),
+                events: Vec::new(),
+            }
+        }
+
+        fn send(&mut self, line: &str) {
+            self.rx.extend_from_slice(line.as_bytes());
+        }
+
+        /// Everything sent so far, and forget it.
+        fn sent(&mut self) -> String {
+            String::from_utf8(core::mem::take(&mut self.tx)).unwrap()
+        }
+
+        /// Poll once a millisecond until `until_ms`, or until the rover
+        /// stops driving with `stop_early`; the events logged.
+        fn run(&mut self, rover: &mut Rover, until_ms: u32, stop_early: bool) -> Vec<Event> {
+            while self.ms < until_ms {
+                self.ms += 1;
+                rover.poll(self);
+                if stop_early && !rover.is_driving() {
+                    break;
+                }
+            }
+            core::mem::take(&mut self.events)
+        }
+    }
+
+    impl Motors for Mock {
+        fn set(&mut self, wheels: Wheels) {
+            self.wheels = wheels;
+        }
+    }
+
+    impl Encoders for Mock {
+        /// 256 duty-ms make a tick: about 0.8 m/s at the cruise duty.
+        fn take(&mut self) -> (i16, i16) {
+            self.acc.0 += i32::from(self.wheels.left);
+            self.acc.1 += i32::from(self.wheels.right);
+            let ticks = (self.acc.0 / 256, self.acc.1 / 256);
+            self.acc.0 -= ticks.0 * 256;
+            self.acc.1 -= ticks.1 * 256;
+            (ticks.0 as i16, ticks.1 as i16)
+        }
+    }
+
+    impl Sensors for Mock {
+        fn sweep(&mut self) -> Sweep {
+            if !self.ms.is_multiple_of(38) {
+                return Sweep::Same;
+            }
+            self.sweeps += 1;
+            match self.fault_at_ms {
+                Some((at, None)) if self.ms >= at => Sweep::Failed,
+                Some((at, Some(c))) if self.ms >= at => Sweep::New([c; 5]),
+                _ => Sweep::New([CLEAR + (self.sweeps % 5) as u16; 5]),
+            }
+        }
+    }
+
+    impl Clock for Mock {
+        fn millis(&mut self) -> u32 {
+            self.ms
+        }
+    }
+
+    impl Serial for Mock {
+        fn read(&mut self) -> Option<u8> {
+            (!self.rx.is_empty()).then(|| self.rx.remove(0))
+        }
+        fn write(&mut self, b: u8) {
+            self.tx.push(b);
+        }
+    }
+
+    impl Board for Mock {
+        fn log(&mut self, event: Event) {
+            self.events.push(event);
+        }
+    }
+
+    fn planner() -> Planner {
+        let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V)
+            .build()
+            .unwrap();
+        for c in CLEAR..CLEAR + 5 {
+            assert_eq!(cfg.calibration[0].reading(c), Reading::Clear);
+        }
+        Planner::new(cfg, Point::new(0, 0))
+    }
+
+    /// The telemetry lines' status letters.
+    fn statuses(sent: &str) -> String {
+        sent.lines()
+            .filter(|l| l.starts_with("T "))
+            .map(|l| l.split(' ').nth(5).unwrap())
+            .collect()
+    }
+
+    fn steps(events: &[Event]) -> Vec<Step> {
+        events
+            .iter()
+            .filter_map(|e| match e {
+                Event::Stepped(s) => Some(*s),
+                Event::SensorFailed => None,
+            })
+            .collect()
+    }
+
+    #[test]
+    fn a_goal_is_driven_to_then_the_motors_stop() {
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        board.send("P 100 -50 90\nG 700 300\n");
+        let events = board.run(&mut rover, 30_000, true);
+        let sent = board.sent();
+        assert!(sent.starts_with("OK\nOK\n"), "{sent}");
+        let steps = steps(&events);
+        // No step before the sensors' first output.
+        assert!(steps[0].ms >= SENSOR_WARMUP_MS, "{:?}", steps[0]);
+        assert_eq!(steps[0].pose.position, Point::new(100, -50));
+        let last = steps.last().unwrap();
+        assert_eq!(last.output.status, Status::Arrived, "{sent}");
+        let (dx, dy) = last.pose.position.to(Point::new(700, 300));
+        assert!(dx * dx + dy * dy < 200 * 200, "{:?}", last.pose);
+        let letters = statuses(&sent);
+        assert_eq!(letters.len(), steps.len());
+        assert!(letters.ends_with('A') && letters[..letters.len() - 1].chars().all(|c| c == 'M'));
+        // Each telemetry line is its step's.
+        let first = sent.lines().find(|l| l.starts_with("T ")).unwrap();
+        let s = steps[0];
+        assert_eq!(
+            first,
+            std::format!(
+                "T {} 100 -50 {} M {} {} 0",
+                s.ms,
+                s.pose.heading.0,
+                s.output.command.heading.0,
+                s.output.command.step_mm
+            )
+        );
+        assert_eq!(board.wheels, Wheels::STOP);
+        // Stopped: no more steps, motors stay off.
+        assert!(board.run(&mut rover, board.ms + 500, false).is_empty());
+        assert_eq!(board.wheels, Wheels::STOP);
+    }
+
+    #[test]
+    fn a_sensor_fault_mid_run_stops_the_rover() {
+        // An unplugged sensor reads 0: the planner's fault status.
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        board.fault_at_ms = Some((1_000, Some(0)));
+        board.send("G 3000 0\n");
+        let events = board.run(&mut rover, 5_000, true);
+        assert!(!rover.is_driving());
+        let last = *steps(&events).last().unwrap();
+        assert_eq!(last.output.status, Status::SensorFault);
+        assert!(last.ms >= 1_000);
+        assert_eq!(board.wheels, Wheels::STOP);
+        assert!(statuses(&board.sent()).ends_with('F'));
+
+        // The converter fails: stopped at once, whatever the executor did.
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        board.fault_at_ms = Some((1_000, None));
+        board.send("G 3000 0\n");
+        let events = board.run(&mut rover, 5_000, true);
+        assert_eq!(events.last(), Some(&Event::SensorFailed));
+        assert_eq!(board.ms, 1_026, "the first sweep at or after 1 s");
+        assert_eq!(board.wheels, Wheels::STOP);
+        // And `D` has no counts to show.
+        board.sent();
+        board.send("D\n");
+        board.run(&mut rover, board.ms + 1, false);
+        assert_eq!(board.sent(), "ERR\n");
+    }
+
+    #[test]
+    fn a_line_that_is_not_a_command_stops_the_rover() {
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        board.send("G 3000 0\n");
+        board.run(&mut rover, 800, false);
+        assert!(rover.is_driving() && board.wheels != Wheels::STOP);
+        board.sent();
+        board.send("G 30x0 0\n");
+        board.ms += 1;
+        rover.poll(&mut board);
+        assert_eq!(board.sent(), "ERR\n");
+        assert!(!rover.is_driving());
+        assert_eq!(board.wheels, Wheels::STOP);
+        assert!(board.run(&mut rover, 2_000, false).is_empty());
+        assert_eq!(board.wheels, Wheels::STOP);
+    }
+
+    #[test]
+    fn a_stop_stops_the_motors_in_the_same_poll() {
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        board.send("G 3000 0\n");
+        board.run(&mut rover, 800, false);
+        assert!(board.wheels != Wheels::STOP);
+        let pose = rover.pose();
+        board.sent();
+        board.send("S\n");
+        // Within the same millisecond: the request alone.
+        rover.poll(&mut board);
+        assert_eq!(board.sent(), "OK\n");
+        assert_eq!(board.wheels, Wheels::STOP);
+        assert!(board.run(&mut rover, 2_000, false).is_empty());
+        assert_eq!(board.wheels, Wheels::STOP);
+        // The encoders' last ticks are integrated, no more.
+        let (dx, dy) = pose.position.to(rover.pose().position);
+        assert!(dx * dx + dy * dy <= 4, "{pose:?} {:?}", rover.pose());
+    }
+
+    #[test]
+    fn requests_are_answered_in_every_state() {
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut board = Mock::new();
+        // No sweep yet: no counts to show; this board reports no stack.
+        board.send("D\nM\n");
+        board.run(&mut rover, 1, false);
+        assert_eq!(board.sent(), "ERR\nERR\n");
+        board.run(&mut rover, 40, false);
+        board.send("D\nR 1 2\n");
+        board.run(&mut rover, 41, false);
+        let mut d = Vec::new();
+        protocol::write_sensor_line(rover.planner().config(), &[CLEAR + 1; 5], &mut |b| {
+            d.push(b)
+        });
+        assert_eq!(
+            board.sent(),
+            std::format!("{}ERR\n", String::from_utf8(d).unwrap())
+        );
+        // The pose may not change while driving.
+        board.send("G 500 0\nP 0 0 0\n");
+        board.run(&mut rover, 42, false);
+        assert_eq!(board.sent(), "OK\nERR\n");
+        assert!(rover.is_driving());
+    }
+}
