@@ -79,7 +79,7 @@ pub use eapf::escape::{EscapeConfig, Verdict};
 pub use eapf::sensors::{
     AdcProfile, Calibration, IrSensors, RawCounts, Reading, Readings, ScriptedSensors, SENSOR_COUNT,
 };
-pub use eapf::Planner;
+pub use eapf::{Mode, Planner};
 pub use fixed::{Angle, Dir, Force, Point, Pose};
 
 /// A planner the rover's executor drives, whatever it decides by: each

@@ -13,7 +13,9 @@ pub mod stack_bound;
 pub mod stm32;
 pub mod stm32_profile;
 
-use planner_core::{AdcProfile, ConfigBuilder, Guard, Output, Planner, Point, Pose, RawCounts};
+use planner_core::{
+    AdcProfile, ConfigBuilder, Guard, Mode, Output, Planner, Point, Pose, RawCounts,
+};
 use sim_host::geom::V2;
 use sim_host::scenario::Scenario;
 use sim_host::sensor::{SensorMode, VirtualSensors};
@@ -100,6 +102,8 @@ pub struct Trace {
     pub frames: Vec<Frame>,
     /// Host core answers, one per frame.
     pub outputs: Vec<Answer>,
+    /// The host planner's mode after each step: what decided it.
+    pub modes: Vec<Mode>,
 }
 
 /// The guard's samples `guards` (a frame's, oldest first) through
@@ -154,6 +158,7 @@ pub fn record_with(
         goal,
         frames: Vec::new(),
         outputs: Vec::new(),
+        modes: Vec::new(),
     };
     let (mut guards, mut guard_stops) = (Vec::new(), 0);
     // Sensor time, s: 50 ms for a step, 40 for each look of the guard.
@@ -171,6 +176,7 @@ pub fn record_with(
             pose,
             raw,
         });
+        trace.modes.push(planner.mode());
         trace.outputs.push(Answer {
             guard_stops,
             output,
@@ -221,8 +227,9 @@ impl Frame {
 
 /// The traces the firmware checks replay: a trap, a paper world, a dense
 /// world, each long enough to fill the collision memory, and a dead end
-/// where the escape drops virtual obstacles, whose forces
-/// make the most expensive steps.
+/// where the escape drops virtual obstacles, whose forces make the most
+/// expensive steps, and then gives up to the follower: every mode of the
+/// planner is replayed (a test holds it, `replay.rs`).
 pub fn standard_traces(adc: AdcProfile) -> Vec<Trace> {
     standard_traces_with(adc, false)
 }
@@ -234,12 +241,40 @@ pub fn standard_traces_with(adc: AdcProfile, set_back: bool) -> Vec<Trace> {
         ("paper/env1-ex1.toml", 120),
         ("traps/comb.toml", 120),
         ("paper/env2-ex1.toml", 120),
-        ("traps/dead-end.toml", 200),
+        // The escape gives up after about 210 steps, and the follower
+        // leads the rover out.
+        ("traps/dead-end.toml", 330),
     ]
     .iter()
     .enumerate()
     .map(|(i, &(rel, steps))| record_with(&scenario(rel), adc, steps, 7 + i as u64, set_back))
     .collect()
+}
+
+/// The replayed steps of `traces` by mode (field, escape, follow: the
+/// host planner's [`Mode`] after each), and the worst of `counts` (one per
+/// step, in replay order) in each: the reports' mode lines,
+/// `<what> step modes: field=<n> escape=<n> follow=<n>` and
+/// `<what> step worst by mode: field=<c> escape=<c> follow=<c>`.
+pub fn mode_lines(what: &str, traces: &[Trace], counts: &[u32]) -> [String; 2] {
+    let modes = [Mode::Field, Mode::Escape, Mode::Follow];
+    let (mut steps, mut worst) = ([0usize; 3], [0u32; 3]);
+    let all = traces.iter().flat_map(|t| &t.modes);
+    for (m, &c) in all.zip(counts) {
+        let i = modes.iter().position(|x| x == m).unwrap_or(0);
+        steps[i] += 1;
+        worst[i] = worst[i].max(c);
+    }
+    [
+        format!(
+            "{what} step modes: field={} escape={} follow={}",
+            steps[0], steps[1], steps[2]
+        ),
+        format!(
+            "{what} step worst by mode: field={} escape={} follow={}",
+            worst[0], worst[1], worst[2]
+        ),
+    ]
 }
 
 /// For each frame of `traces`, in replay order: whether the rover stands

@@ -6,7 +6,8 @@
 //! planner step runs (from the entry of `timed::step` until it returns),
 //! and to the function the step's own code called it under (a shadow call
 //! stack kept from the `call`/`rcall`/`icall`, `ret`/`reti` instructions
-//! and interrupt entries).
+//! and interrupt entries). The step's own code is `timed::step` and
+//! `Planner::step_raw`, which the AVR build keeps out of line.
 //! Functions are named from the ELF's symbol table: the debug line tables
 //! of the LTO-built AVR image name the wrong files, so a profile by source
 //! line is not to be had; mark a function `#[inline(never)]` to see it.
@@ -50,6 +51,12 @@ struct Sim {
     /// Return addresses of the calls made inside the step, and where the
     /// outermost one went.
     shadow: Vec<u32>,
+    /// How deep in the shadow stack the step's own code is: 1 inside
+    /// `step_raw` (see [`Sim::own_fn`]), else 0.
+    own_depth: usize,
+    /// A function whose code counts as the step's own (`step_raw`), not as
+    /// a callee.
+    own_fn: u32,
     outer_callee: u32,
     /// The same split of this step, and of the worst step.
     this_step: HashMap<u32, u64>,
@@ -107,7 +114,7 @@ impl Operands {
 }
 
 impl Sim {
-    fn new(elf: &std::path::Path, step_entry: u32, arith: (u32, u32)) -> Sim {
+    fn new(elf: &std::path::Path, step_entry: u32, own_fn: u32, arith: (u32, u32)) -> Sim {
         let mcu = CString::new("atmega328p").unwrap();
         let path = CString::new(elf.to_str().unwrap()).unwrap();
         unsafe {
@@ -138,6 +145,8 @@ impl Sim {
                 hist: HashMap::new(),
                 by_callee: HashMap::new(),
                 shadow: Vec::new(),
+                own_depth: 0,
+                own_fn,
                 outer_callee: 0,
                 this_step: HashMap::new(),
                 worst_step: (0, HashMap::new()),
@@ -222,7 +231,7 @@ impl Sim {
         let spent = unsafe { (*self.avr).cycle } - before;
         if let Some(sp) = self.in_step {
             *self.hist.entry(pc).or_default() += spent;
-            let callee = if self.shadow.is_empty() {
+            let callee = if self.shadow.len() <= self.own_depth {
                 0
             } else {
                 self.outer_callee
@@ -232,27 +241,35 @@ impl Sim {
             // The instruction's own effect on the call stack first: an
             // interrupt may have been taken right after it.
             if let Some((ret, target)) = call {
-                if self.shadow.is_empty() {
-                    self.outer_callee = target;
+                if self.shadow.len() == self.own_depth {
+                    if target == self.own_fn {
+                        self.own_depth += 1;
+                    } else {
+                        self.outer_callee = target;
+                    }
                 }
                 self.shadow.push(ret);
             } else if matches!(op, 0x9508 | 0x9518) {
                 // ret, reti.
                 self.shadow.pop();
+                self.own_depth = self.own_depth.min(self.shadow.len());
             }
             // An interrupt: simavr went to the vector table. Its `reti`
             // pops this frame (a Timer1 overflow, say, in a step).
             if next < VECTOR_TABLE_END && call.is_none() {
-                if self.shadow.is_empty() {
+                if self.shadow.len() == self.own_depth {
                     self.outer_callee = next;
                 }
                 self.shadow.push(0);
             }
-            // `ret` from the step pops the return address above the entry SP.
-            if self.sp() > sp {
+            // `ret` from the step pops the return address above the entry
+            // SP. (Only a `ret`: an epilogue that writes SP a byte at a time
+            // can leave it above the entry SP for one instruction.)
+            if op == 0x9508 && self.sp() > sp {
                 self.in_step = None;
                 self.unbalanced += u64::from(!self.shadow.is_empty());
                 self.shadow.clear();
+                self.own_depth = 0;
                 let step = std::mem::take(&mut self.this_step);
                 for (callee, c) in &step {
                     *self.by_callee.entry(*callee).or_default() += c;
@@ -303,7 +320,7 @@ impl Sim {
 /// its first line, USART0's rate read from its registers (UBRR0, and U2X0
 /// in UCSR0A, which halves the divider).
 pub fn usart_baud(elf: &Path) -> f64 {
-    let mut sim = Sim::new(elf, u32::MAX, (u32::MAX, u32::MAX));
+    let mut sim = Sim::new(elf, u32::MAX, u32::MAX, (u32::MAX, u32::MAX));
     sim.line();
     let reg = |a: usize| unsafe { *(*sim.avr).data.add(a) };
     let ubrr = u16::from_le_bytes([reg(0xc4), reg(0xc5)]);
@@ -381,11 +398,15 @@ pub fn profile(elf: &Path, traces: &[Trace]) -> Profile {
     let entry = syms
         .entry_of("replay::timed::step")
         .unwrap_or_else(|| panic!("no timed::step in {elf:?}"));
+    // Out of line on the AVR, inlined elsewhere: absent is fine.
+    let own_fn = syms
+        .entry_of("planner_core::eapf::Planner::step_raw")
+        .unwrap_or(u32::MAX);
     let arith = ["__mulsi3", "__udivmodsi4"].map(|f| {
         syms.entry_of(f)
             .unwrap_or_else(|| panic!("no {f} in {elf:?}"))
     });
-    let mut sim = Sim::new(elf, entry, (arith[0], arith[1]));
+    let mut sim = Sim::new(elf, entry, own_fn, (arith[0], arith[1]));
     assert_eq!(sim.line(), "READY", "boot line");
     let mut step_cycles = Vec::new();
     let mut mismatches = 0;

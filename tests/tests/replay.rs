@@ -4,7 +4,7 @@
 //! the steps and of the guard's looks during the advances). This is the
 //! host half of the bit-exactness check the firmware builds share.
 
-use planner_core::{AdcProfile, ConfigBuilder, Planner, RawCounts, ScriptedSensors};
+use planner_core::{AdcProfile, ConfigBuilder, Mode, Planner, RawCounts, ScriptedSensors};
 use rover_tests::{record, run_guards, scenario, Answer};
 
 #[test]
@@ -39,4 +39,23 @@ fn replayed_trace_gives_identical_commands() {
     assert!(t.frames.iter().any(|f| !f.guards.is_empty()));
     assert!(with_flank > 0, "no step with flank points");
     assert_eq!(script.remaining(), 0);
+}
+
+/// The standard traces, which both firmwares replay and time, run every
+/// mode of the planner (for both sensor mountings and both ADCs), so that
+/// the reports' worst step covers the field, the escape and the follower.
+#[test]
+fn standard_traces_run_every_mode() {
+    for adc in [AdcProfile::AVR_10BIT_5V, AdcProfile::STM32_12BIT_3V3] {
+        for set_back in [false, true] {
+            let traces = rover_tests::standard_traces_with(adc, set_back);
+            for mode in [Mode::Field, Mode::Escape, Mode::Follow] {
+                let n: usize = traces
+                    .iter()
+                    .map(|t| t.modes.iter().filter(|&&m| m == mode).count())
+                    .sum();
+                assert!(n >= 20, "{adc:?} set_back={set_back}: {n} {mode:?} steps");
+            }
+        }
+    }
 }

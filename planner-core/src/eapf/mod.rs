@@ -738,6 +738,31 @@ impl Planner {
     pub fn paper_step_mm(&self) -> u16 {
         self.paper_step_mm
     }
+
+    /// Which part of the planner decides its steps now.
+    pub fn mode(&self) -> Mode {
+        if self.follow.active() {
+            Mode::Follow
+        } else if self.escape.is_empty() {
+            Mode::Field
+        } else {
+            Mode::Escape
+        }
+    }
+}
+
+/// Which part of the planner decides a step.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[cfg_attr(feature = "defmt", derive(defmt::Format))]
+pub enum Mode {
+    /// The potential field alone (EAPF): the goal's pull, the collision
+    /// points' push.
+    Field,
+    /// The field with the escape's virtual obstacles ("liquid movement")
+    /// pushing the rover out of a local minimum.
+    Escape,
+    /// Boundary following, once the escape has given up.
+    Follow,
 }
 
 impl Navigator for Planner {

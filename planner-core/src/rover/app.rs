@@ -220,7 +220,7 @@ impl<'p> Rover<'p> {
     }
 
     /// Answer one line (`None`: not a command).
-    #[inline(never)]
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn answer(&mut self, board: &mut impl Board, req: Option<Request>) {
         let reply: &[u8] = match req {
             Some(Request::Goal(x, y)) => {
@@ -324,7 +324,7 @@ impl<'p> Rover<'p> {
 
     /// The executor's duties; the guard looks at a sweep it has not seen
     /// when a look is due.
-    #[inline(never)]
+    #[cfg_attr(target_arch = "avr", inline(never))]
     fn advance(&mut self, now: u32, pose: Pose) -> Wheels {
         let due =
             self.unseen && now.wrapping_sub(self.last_guard_ms) >= self.guard_period_ms.into();
@@ -346,7 +346,7 @@ impl<'p> Rover<'p> {
 
 /// A planner step and its cycles. The fences and `black_box`es keep the
 /// compiler from moving work across the two cycle reads.
-#[inline(never)]
+#[cfg_attr(target_arch = "avr", inline(never))]
 fn timed_step(
     planner: &mut Planner,
     clock: &mut impl Clock,

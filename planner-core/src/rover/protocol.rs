@@ -171,6 +171,7 @@ pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, out: &mut dyn FnMut(u8))
 /// ten not above `v` first, then a digit per power: no buffer, no index, no
 /// recursion (the stack bound needs none). `dyn`, so that an image holds one
 /// copy whatever it writes to.
+#[inline(never)]
 pub fn write_number(v: u32, out: &mut dyn FnMut(u8)) {
     let mut p: u32 = 1;
     while p <= v / 10 {

@@ -1,10 +1,11 @@
 //! `cargo xtask avr-report`: the ATmega328P firmware's size (from the ELF)
 //! and its planner-step cycle counts (simavr, replaying the standard
-//! traces), measured now, nothing typed in.
+//! traces), and the replayed steps by the planner's mode with the worst
+//! of each, measured now, nothing typed in.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
-use rover_tests::{mean_worst, standard_traces};
+use rover_tests::{mean_worst, mode_lines, standard_traces};
 
 fn main() {
     let (text, data, bss) = elf_size(&firmware_elf());
@@ -32,6 +33,9 @@ fn main() {
     let (_, f32_worst) = mean_worst(&f32_cycles);
     println!("avr size: text={text} data={data} bss={bss} stack_peak={peak}");
     println!("avr step cycles: mean={mean} worst={worst} f32_worst={f32_worst}");
+    for line in mode_lines("avr", &traces, &cycles) {
+        println!("{line}");
+    }
     if mismatches > 0 {
         eprintln!("avr-report: {mismatches} steps differ from the host core");
         std::process::exit(1);

@@ -5,7 +5,7 @@
 
 use planner_core::AdcProfile;
 use rover_tests::stm32::{board_elf, elf_size, instructions, run_traces};
-use rover_tests::{mean_worst, standard_traces};
+use rover_tests::{mean_worst, mode_lines, standard_traces};
 
 fn main() {
     let (text, data, bss) = elf_size(&board_elf());
@@ -16,6 +16,9 @@ fn main() {
     let (mean, worst) = mean_worst(&counts);
     println!("stm32 size: text={text} data={data} bss={bss}");
     println!("stm32 step instructions: mean={mean} worst={worst}");
+    for line in mode_lines("stm32", &traces, &counts) {
+        println!("{line}");
+    }
     if mismatches > 0 {
         eprintln!("stm32-report: {mismatches} steps differ from the host core");
         std::process::exit(1);
