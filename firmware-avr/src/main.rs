@@ -12,10 +12,12 @@
 #![no_std]
 #![no_main]
 #![feature(abi_avr_interrupt)]
+#![feature(asm_experimental_arch)]
 
 mod adc;
 mod board;
 mod clock;
+mod eeprom;
 mod encoders;
 mod motors;
 mod progmem;
@@ -23,9 +25,10 @@ mod serial;
 mod stack;
 
 use planner_core::rover::app::{self, Board, Rover, RoverConfig, Sweep};
+use planner_core::rover::calibration::STORED_BYTES;
 use planner_core::rover::drive::Wheels;
 use planner_core::rover::protocol::{self, Request};
-use planner_core::{Config, Planner, Point};
+use planner_core::{AdcProfile, Config, Planner, Point};
 
 /// Goal set at build time, a command line such as `"G 2000 1500"` (optional;
 /// `G` over serial otherwise).
@@ -102,6 +105,14 @@ impl Board for Uno {
     fn stack_peak(&self) -> Option<u16> {
         Some(stack::peak())
     }
+    fn load_calibration(&mut self, bytes: &mut [u8; STORED_BYTES]) -> bool {
+        eeprom::read(&self.dp, eeprom::CALIBRATION_AT, bytes);
+        true
+    }
+    fn store_calibration(&mut self, bytes: &[u8; STORED_BYTES]) -> bool {
+        eeprom::update(&self.dp, eeprom::CALIBRATION_AT, bytes);
+        true
+    }
 }
 
 #[avr_device::entry]
@@ -135,11 +146,15 @@ fn main() -> ! {
     // deepest point (`tests/src/stack_bound.rs`).
     let mut planner = Planner::new(Config::UNSET, Point::new(0, 0));
     planner.load_config(progmem::load_config);
-    let mut rover = Rover::new(&mut planner, RoverConfig::REFERENCE);
+    let mut rover = Rover::new(
+        &mut planner,
+        RoverConfig::reference(AdcProfile::AVR_10BIT_5V),
+    );
     let mut uno = Uno {
         dp,
         last_sweep: adc::sweeps(),
     };
+    rover.load_calibration(&mut uno);
     if let Some(Request::Goal(x, y)) = BUILD_GOAL.and_then(|g| protocol::parse(g.as_bytes())) {
         rover.go(Point::new(x, y));
     }

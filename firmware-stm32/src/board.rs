@@ -27,7 +27,7 @@ use panic_probe as _;
 use planner_core::eapf::sensors::OneShotSensors;
 use planner_core::rover::app::{self, Board, Event, Rover, RoverConfig, Sweep};
 use planner_core::rover::drive::Wheels;
-use planner_core::{IrSensors, Planner, Point};
+use planner_core::{AdcProfile, IrSensors, Planner, Point};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
 use stm32f4xx_hal::pac::USART1;
 use stm32f4xx_hal::qei::Qei;
@@ -196,7 +196,10 @@ pub fn run() -> ! {
     syst.enable_counter();
 
     let mut planner = Planner::new(crate::CONFIG, Point::new(0, 0));
-    let mut rover = Rover::new(&mut planner, RoverConfig::REFERENCE);
+    let mut rover = Rover::new(
+        &mut planner,
+        RoverConfig::reference(AdcProfile::STM32_12BIT_3V3),
+    );
     defmt::info!("ready");
     let _ = tx.write_str("READY\n");
     let mut parts = Parts {
@@ -206,6 +209,9 @@ pub fn run() -> ! {
         tx,
         rx,
     };
+    // No storage for the sensors' calibration on this board yet: the
+    // datasheet's curve (`K` is used until a reset, and answers `ERR`).
+    rover.load_calibration(&mut parts);
     loop {
         watchdog.feed();
         rover.poll(&mut parts);

@@ -176,6 +176,20 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
     },
+    /// Fit one sensor's calibration from its counts with a card at 100,
+    /// 200, … 800 mm (the first five fields of the firmware's `D` lines),
+    /// and print the `K` line that stores it on the board.
+    Calibrate {
+        /// The sensor, 0 (−40°) … 4 (+40°).
+        #[arg(long, value_parser = clap::value_parser!(u8).range(0..5))]
+        sensor: u8,
+        /// The board's ADC.
+        #[arg(long, value_enum, default_value = "avr")]
+        adc: Adc,
+        /// Its eight counts, nearest card first.
+        #[arg(num_args = 8, required = true)]
+        counts: Vec<u16>,
+    },
     /// Write the faults page: one planner on every still-world set under
     /// no fault and each fault of `--fault` with its defaults, a table of
     /// fault × set.
@@ -292,8 +306,41 @@ fn set_back_applies(set_back: bool, planners: &[PlannerKind]) -> Result<(), Stri
     }
 }
 
+/// A board's ADC.
+#[derive(Clone, Copy, clap::ValueEnum)]
+enum Adc {
+    /// ATmega328P: 10 bits, 5 V.
+    Avr,
+    /// STM32F4: 12 bits, 3.3 V.
+    Stm32,
+}
+
+/// The `K` line for `sensor`'s `counts` at the card distances.
+fn calibrate(sensor: u8, adc: Adc, counts: &[u16]) -> Result<String, String> {
+    use planner_core::rover::calibration::{datasheet_row, fit, Row, CARD_MM};
+    let adc = match adc {
+        Adc::Avr => planner_core::AdcProfile::AVR_10BIT_5V,
+        Adc::Stm32 => planner_core::AdcProfile::STM32_12BIT_3V3,
+    };
+    let row: Row = counts
+        .try_into()
+        .map_err(|_| format!("{} counts, not {}", counts.len(), CARD_MM.len()))?;
+    let k = fit(adc, &row).map_err(|e| {
+        format!(
+            "sensor {sensor}: {e:?}: counts {row:?} at {CARD_MM:?} mm (the datasheet's: {:?})",
+            datasheet_row(adc)
+        )
+    })?;
+    Ok(format!("K {sensor} {} {}\n", k.gain_q8, k.offset))
+}
+
 fn real_main(cli: Cli) -> Result<(), String> {
     match cli.cmd {
+        Cmd::Calibrate {
+            sensor,
+            adc,
+            counts,
+        } => say(&calibrate(sensor, adc, &counts)?),
         Cmd::Run {
             file,
             planner,

@@ -576,3 +576,37 @@ fn bench_takes_every_fault_and_records_it() {
     assert!(err.contains("sensor=9 is not 0..=4"), "{err}");
     std::fs::remove_dir_all(&dir).ok();
 }
+
+/// `calibrate` fits a sensor's card counts into the `K` line that stores
+/// them, the one the core's fit gives; counts no working sensor gives are
+/// an error that says why.
+#[test]
+fn calibrate_prints_the_k_line_or_why_not() {
+    use planner_core::rover::calibration::{datasheet_row, fit};
+    let adc = planner_core::AdcProfile::AVR_10BIT_5V;
+    // A unit reading 12 % high.
+    let row = datasheet_row(adc).map(|c| (u32::from(c) * 112 / 100) as u16);
+    let k = fit(adc, &row).unwrap();
+    let counts: Vec<String> = row.iter().map(u16::to_string).collect();
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["calibrate", "--sensor", "3"])
+        .args(&counts)
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    assert_eq!(
+        String::from_utf8_lossy(&out.stdout),
+        format!("K 3 {} {}\n", k.gain_q8, k.offset)
+    );
+    assert_ne!(k.gain_q8, 256, "a correction, not none");
+    // The card at 800 mm read as near as at 700: not falling.
+    let mut bad = counts.clone();
+    bad[7] = bad[6].clone();
+    let out = Command::new(env!("CARGO_BIN_EXE_sim-host"))
+        .args(["calibrate", "--sensor", "3"])
+        .args(&bad)
+        .output()
+        .unwrap();
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("NotFalling"));
+}

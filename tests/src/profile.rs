@@ -510,3 +510,86 @@ impl Symbols {
         }
     }
 }
+
+/// The firmware in simavr driven directly, for what avr-tester does not
+/// give: a reset (the power cycle of a board that keeps its EEPROM) and the
+/// EEPROM's bytes.
+pub struct Bare(Sim);
+
+impl Bare {
+    /// Boot `elf` until its first line; its ADC's AVCC at 5 V.
+    pub fn boot(elf: &Path) -> (Bare, String) {
+        let mut sim = Sim::new(elf, u32::MAX, u32::MAX, (u32::MAX, u32::MAX));
+        unsafe { (*sim.avr).avcc = 5_000 };
+        let first = sim.line();
+        (Bare(sim), first)
+    }
+
+    /// Reset the MCU (RAM and registers, not flash or EEPROM), as a power
+    /// cycle does; its first line.
+    pub fn reset(&mut self) -> String {
+        unsafe { ffi::avr_reset(self.0.avr) };
+        self.0.rx.clear();
+        self.0.line()
+    }
+
+    /// Send `line` (and `\n`); the reply line, past telemetry (`T …`).
+    pub fn request(&mut self, line: &str) -> String {
+        self.0.send(format!("{line}\n").as_bytes());
+        loop {
+            let l = self.0.line();
+            if !l.starts_with("T ") {
+                return l;
+            }
+        }
+    }
+
+    /// The next line the firmware sends.
+    pub fn line(&mut self) -> String {
+        self.0.line()
+    }
+
+    /// Put `mv` millivolts on analog input `channel`.
+    pub fn set_adc_mv(&mut self, channel: u32, mv: u32) {
+        let adc = u32::from_be_bytes([b'a', b'd', b'c', b'0']);
+        unsafe {
+            let irq = ffi::avr_io_getirq(self.0.avr, adc, (ffi::ADC_IRQ_ADC0 + channel) as i32);
+            ffi::avr_raise_irq(irq, mv);
+        }
+    }
+
+    /// Run for `us` microseconds of the firmware's time.
+    pub fn run_us(&mut self, us: u64) {
+        let until = unsafe { (*self.0.avr).cycle } + us * (F_CPU as u64 / 1_000_000);
+        while unsafe { (*self.0.avr).cycle } < until {
+            self.0.one();
+        }
+    }
+
+    /// The EEPROM's bytes from `at`, `len` of them, or put `bytes` there.
+    pub fn eeprom(&mut self, at: u16, len: usize, put: Option<&[u8]>) -> Vec<u8> {
+        let get = u32::from_be_bytes([b'e', b'e', b'g', b'p']);
+        let set = u32::from_be_bytes([b'e', b'e', b's', b'p']);
+        let mut out = vec![0u8; len];
+        unsafe {
+            if let Some(bytes) = put {
+                let mut d = ffi::avr_eeprom_desc_t {
+                    ee: bytes.as_ptr() as *mut u8,
+                    offset: at,
+                    size: bytes.len() as u32,
+                };
+                ffi::avr_ioctl(self.0.avr, set, &mut d as *mut _ as *mut _);
+            }
+            let mut d = ffi::avr_eeprom_desc_t {
+                ee: std::ptr::null_mut(),
+                offset: at,
+                size: len as u32,
+            };
+            ffi::avr_ioctl(self.0.avr, get, &mut d as *mut _ as *mut _);
+            if !d.ee.is_null() {
+                std::ptr::copy_nonoverlapping(d.ee, out.as_mut_ptr(), len);
+            }
+        }
+        out
+    }
+}

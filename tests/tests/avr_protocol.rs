@@ -15,7 +15,7 @@ fn host_sensor_line(raw: &RawCounts) -> String {
         .build()
         .unwrap();
     let mut line = Vec::new();
-    write_sensor_line(&cfg, raw, &mut |b| line.push(b));
+    write_sensor_line(&cfg, raw, raw, &mut |b| line.push(b));
     String::from_utf8(line).unwrap().trim_end().to_string()
 }
 

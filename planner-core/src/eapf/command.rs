@@ -124,6 +124,7 @@ impl Output {
     }
 
     /// Stay put, facing `heading`, with `status`.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn stop(heading: Angle, status: Status) -> Output {
         Output {
             command: Command {

@@ -173,6 +173,7 @@ impl Follow {
 
     /// Start: seek first. The `second` round, after a first loop handed
     /// back to the potential field, has the shorter budget.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn start(&mut self, second: bool) {
         *self = Follow {
             side: 1,

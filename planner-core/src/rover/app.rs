@@ -21,9 +21,10 @@
 //!      each new sweep at most every [`RoverConfig::guard_period_ms`].
 
 use crate::eapf::command::{Guard, Output, Status};
-use crate::eapf::sensors::{RawCounts, SENSOR_WARMUP_MS};
+use crate::eapf::sensors::{AdcProfile, RawCounts, SENSOR_WARMUP_MS};
 use crate::eapf::Planner;
 use crate::fixed::{Angle, Point, Pose};
+use crate::rover::calibration::{Corrections, Source, STORED_BYTES};
 use crate::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
 use crate::rover::protocol::{self, LineReader, Request};
 use core::sync::atomic::{compiler_fence, Ordering};
@@ -87,6 +88,17 @@ pub trait Board: Motors + Encoders + Sensors + Clock + Serial {
     fn log(&mut self, event: Event) {
         let _ = event;
     }
+    /// Read the stored calibration into `bytes`; `false` where the board
+    /// keeps none (then the datasheet's serves).
+    fn load_calibration(&mut self, bytes: &mut [u8; STORED_BYTES]) -> bool {
+        let _ = bytes;
+        false
+    }
+    /// Store the calibration; `false` if the board cannot.
+    fn store_calibration(&mut self, bytes: &[u8; STORED_BYTES]) -> bool {
+        let _ = bytes;
+        false
+    }
 }
 
 /// How the rover drives.
@@ -100,16 +112,21 @@ pub struct RoverConfig {
     /// tick on the ATmega328P; the sensors give a new sweep every ~38 ms
     /// and the rover covers 1.4 mm in 4 ms at full speed.
     pub guard_period_ms: u16,
+    /// The sensors' ADC (for their calibration's datasheet counts).
+    pub adc: AdcProfile,
 }
 
 impl RoverConfig {
     /// The reference rover ([`Body::REFERENCE`]), the default executor,
-    /// a guard look every 4 ms.
-    pub const REFERENCE: RoverConfig = RoverConfig {
-        body: Body::REFERENCE,
-        executor: ExecutorConfig::DEFAULT,
-        guard_period_ms: 4,
-    };
+    /// a guard look every 4 ms, sensors on `adc`.
+    pub const fn reference(adc: AdcProfile) -> RoverConfig {
+        RoverConfig {
+            body: Body::REFERENCE,
+            executor: ExecutorConfig::DEFAULT,
+            guard_period_ms: 4,
+            adc,
+        }
+    }
 }
 
 /// A planner step as it ran.
@@ -156,6 +173,10 @@ pub struct Rover<'p> {
     counts: Option<RawCounts>,
     /// The latest sweep came after the guard's last look.
     unseen: bool,
+    /// Each sensor's correction, and where they came from (the datasheet's
+    /// curve: none, and the counts go to the planner as they are).
+    tables: Corrections,
+    source: Source,
 }
 
 impl<'p> Rover<'p> {
@@ -173,7 +194,30 @@ impl<'p> Rover<'p> {
             last_guard_ms: 0,
             counts: None,
             unseen: false,
+            tables: Corrections::none(cfg.adc),
+            source: Source::Datasheet,
         }
+    }
+
+    /// Read the calibration the board stored, if any: a corrupt or refused
+    /// copy leaves the datasheet's in use. Once, at start-up. An erased
+    /// store (every byte 0xff, as a new EEPROM or flash reads) holds none.
+    pub fn load_calibration(&mut self, board: &mut impl Board) -> Source {
+        let mut bytes = [0; STORED_BYTES];
+        let stored = board.load_calibration(&mut bytes);
+        self.source = if !stored || bytes.iter().all(|&b| b == 0xff) {
+            Source::Datasheet
+        } else if self.tables.load(&bytes).is_ok() {
+            Source::Stored
+        } else {
+            Source::Corrupt
+        };
+        self.source
+    }
+
+    /// Where the sensors' calibration comes from.
+    pub fn calibration(&self) -> Source {
+        self.source
     }
 
     /// Drive to `goal` (what `G` does): forget the map, start driving.
@@ -200,6 +244,7 @@ impl<'p> Rover<'p> {
 
     /// Answer the requests received, then run the control tick if the
     /// board's clock has moved on since the last.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn poll(&mut self, board: &mut impl Board) {
         let now = board.millis();
         while let Some(b) = board.read() {
@@ -220,7 +265,7 @@ impl<'p> Rover<'p> {
     }
 
     /// Answer one line (`None`: not a command).
-    #[cfg_attr(target_arch = "avr", inline(never))]
+    #[inline(never)]
     fn answer(&mut self, board: &mut impl Board, req: Option<Request>) {
         let reply: &[u8] = match req {
             Some(Request::Goal(x, y)) => {
@@ -245,11 +290,31 @@ impl<'p> Rover<'p> {
             }
             Some(Request::Sensors) => match self.counts {
                 Some(raw) => {
-                    protocol::write_sensor_line(self.planner.config(), &raw, &mut sink(board));
+                    let read = planner_counts(&self.tables, self.source, &raw);
+                    protocol::write_sensor_line(
+                        self.planner.config(),
+                        &raw,
+                        &read,
+                        &mut sink(board),
+                    );
                     return;
                 }
                 None => b"ERR\n",
             },
+            Some(Request::Calibrate(sensor, k)) => {
+                match self.tables.set(sensor.into(), k) {
+                    Err(_) => b"ERR\n",
+                    // In use from now on, stored or not.
+                    Ok(()) => {
+                        self.source = Source::Stored;
+                        if board.store_calibration(&self.tables.to_bytes()) {
+                            b"OK\n"
+                        } else {
+                            b"ERR\n"
+                        }
+                    }
+                }
+            }
             Some(Request::Memory) => match board.stack_peak() {
                 Some(peak) => {
                     write_bytes(board, b"M stack_peak=");
@@ -286,14 +351,15 @@ impl<'p> Rover<'p> {
                 board.set(Wheels::STOP);
                 return;
             };
-            let (output, cycles) = timed_step(self.planner, board, pose, raw);
+            let read = planner_counts(&self.tables, self.source, raw);
+            let (output, cycles) = timed_step(self.planner, board, pose, &read);
             let step = Step {
                 ms: now,
                 pose,
                 output,
                 cycles,
             };
-            write_telemetry(&mut sink(board), &step);
+            write_telemetry(&mut sink(board), &step, self.source);
             board.log(Event::Stepped(step));
             if step.output.status != Status::Moving {
                 // Arrived, unreachable or a sensor fault: safe stop.
@@ -330,17 +396,27 @@ impl<'p> Rover<'p> {
             self.unseen && now.wrapping_sub(self.last_guard_ms) >= self.guard_period_ms.into();
         let (planner, counts) = (&mut *self.planner, &self.counts);
         let (unseen, last_guard_ms) = (&mut self.unseen, &mut self.last_guard_ms);
+        let (tables, source) = (&self.tables, self.source);
         self.executor
             .tick(pose, self.odometry.travelled_mm(), |remaining_mm| {
                 match (due, counts) {
                     (true, Some(raw)) => {
                         *unseen = false;
                         *last_guard_ms = now;
-                        planner.guard_raw(raw, remaining_mm)
+                        planner.guard_raw(&planner_counts(tables, source, raw), remaining_mm)
                     }
                     _ => Guard::Continue,
                 }
             })
+    }
+}
+
+/// The counts the planner reads for the sensors' `raw` counts: through
+/// each sensor's own calibration, if there is one.
+fn planner_counts(tables: &Corrections, source: Source, raw: &RawCounts) -> RawCounts {
+    match source {
+        Source::Stored => tables.apply(raw),
+        Source::Datasheet | Source::Corrupt => *raw,
     }
 }
 
@@ -390,9 +466,9 @@ fn write_field(out: &mut dyn FnMut(u8), v: u32) {
     protocol::write_number(v, out);
 }
 
-/// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
+/// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal>`
 /// ([`protocol`]), a byte at a time to `out`.
-fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step) {
+fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source) {
     let position = step.pose.position;
     let command = step.output.command;
     out(b'T');
@@ -407,6 +483,8 @@ fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step) {
     write_field(out, command.heading.0.into());
     write_field(out, command.step_mm.into());
     write_field(out, step.cycles);
+    out(b' ');
+    out(cal.letter());
     out(b'\n');
 }
 
@@ -432,6 +510,8 @@ mod tests {
         /// What the sensors give from this time on, ms: counts, or a failure.
         fault_at_ms: Option<(u32, Option<u16>)>,
         sweeps: u32,
+        /// The board's storage for the calibration, if it has one.
+        stored: Option<[u8; STORED_BYTES]>,
         rx: Vec<u8>,
         tx: Vec<u8>,
         events: Vec<Event>,
@@ -445,6 +525,7 @@ mod tests {
                 acc: (0, 0),
                 fault_at_ms: None,
                 sweeps: 0,
+                stored: None,
                 rx: Vec::new(),
                 tx: Vec::new(),
                 events: Vec::new(),
@@ -525,6 +606,13 @@ mod tests {
         fn log(&mut self, event: Event) {
             self.events.push(event);
         }
+        fn load_calibration(&mut self, bytes: &mut [u8; STORED_BYTES]) -> bool {
+            self.stored.map(|s| *bytes = s).is_some()
+        }
+        fn store_calibration(&mut self, bytes: &[u8; STORED_BYTES]) -> bool {
+            self.stored = Some(*bytes);
+            true
+        }
     }
 
     fn planner() -> Planner {
@@ -558,7 +646,7 @@ mod tests {
     #[test]
     fn a_goal_is_driven_to_then_the_motors_stop() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         board.send("P 100 -50 90\nG 700 300\n");
         let events = board.run(&mut rover, 30_000, true);
@@ -581,7 +669,7 @@ mod tests {
         assert_eq!(
             first,
             std::format!(
-                "T {} 100 -50 {} M {} {} 0",
+                "T {} 100 -50 {} M {} {} 0 -",
                 s.ms,
                 s.pose.heading.0,
                 s.output.command.heading.0,
@@ -598,7 +686,7 @@ mod tests {
     fn a_sensor_fault_mid_run_stops_the_rover() {
         // An unplugged sensor reads 0: the planner's fault status.
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         board.fault_at_ms = Some((1_000, Some(0)));
         board.send("G 3000 0\n");
@@ -612,7 +700,7 @@ mod tests {
 
         // The converter fails: stopped at once, whatever the executor did.
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         board.fault_at_ms = Some((1_000, None));
         board.send("G 3000 0\n");
@@ -630,7 +718,7 @@ mod tests {
     #[test]
     fn a_line_that_is_not_a_command_stops_the_rover() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         board.send("G 3000 0\n");
         board.run(&mut rover, 800, false);
@@ -649,7 +737,7 @@ mod tests {
     #[test]
     fn a_stop_stops_the_motors_in_the_same_poll() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         board.send("G 3000 0\n");
         board.run(&mut rover, 800, false);
@@ -671,7 +759,7 @@ mod tests {
     #[test]
     fn requests_are_answered_in_every_state() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::REFERENCE);
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
         let mut board = Mock::new();
         // No sweep yet: no counts to show; this board reports no stack.
         board.send("D\nM\n");
@@ -681,9 +769,8 @@ mod tests {
         board.send("D\nR 1 2\n");
         board.run(&mut rover, 41, false);
         let mut d = Vec::new();
-        protocol::write_sensor_line(rover.planner().config(), &[CLEAR + 1; 5], &mut |b| {
-            d.push(b)
-        });
+        let clear = [CLEAR + 1; 5];
+        protocol::write_sensor_line(rover.planner().config(), &clear, &clear, &mut |b| d.push(b));
         assert_eq!(
             board.sent(),
             std::format!("{}ERR\n", String::from_utf8(d).unwrap())
@@ -693,5 +780,89 @@ mod tests {
         board.run(&mut rover, 42, false);
         assert_eq!(board.sent(), "OK\nERR\n");
         assert!(rover.is_driving());
+    }
+
+    /// The `K` line for `sensor` whose counts are `percent` of the
+    /// datasheet's at each card distance, as the console fits it.
+    fn k_line(sensor: usize, percent: u32) -> String {
+        use crate::rover::calibration::{datasheet_row, fit};
+        let row =
+            datasheet_row(AdcProfile::AVR_10BIT_5V).map(|c| (u32::from(c) * percent / 100) as u16);
+        let k = fit(AdcProfile::AVR_10BIT_5V, &row).unwrap();
+        std::format!("K {sensor} {} {}\n", k.gain_q8, k.offset)
+    }
+
+    #[test]
+    fn a_calibration_is_kept_stored_and_used_after_a_restart() {
+        let adc = AdcProfile::AVR_10BIT_5V;
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut board = Mock::new();
+        assert_eq!(rover.load_calibration(&mut board), Source::Datasheet);
+        // Refused: a gain no sensor needs, an unknown sensor.
+        board.send("K 0 900 0\nK 0 256 9999\n");
+        board.send(&k_line(5, 100));
+        board.run(&mut rover, 1, false);
+        assert_eq!(board.sent(), "ERR\nERR\nERR\n");
+        assert_eq!(board.stored, None);
+        // Sensor 2 reads 20 % high.
+        board.send(&k_line(2, 120));
+        board.run(&mut rover, 2, false);
+        assert_eq!(board.sent(), "OK\n");
+        let stored = board.stored.expect("stored");
+
+        // Power cycle: a new rover on the same board reads it back, and the
+        // planner reads sensor 2's count as the datasheet's.
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut board = Mock::new();
+        board.stored = Some(stored);
+        assert_eq!(rover.load_calibration(&mut board), Source::Stored);
+        // A card at 200 mm: the datasheet's count there, and sensor 2's.
+        let at_200 = adc.counts_for_mv(1_390);
+        let strong = (u32::from(at_200) * 120 / 100) as u16;
+        board.fault_at_ms = Some((0, Some(strong)));
+        board.run(&mut rover, 40, false);
+        board.send("D\n");
+        board.run(&mut rover, 41, false);
+        let sent = board.sent();
+        let f: Vec<&str> = sent.split_whitespace().collect();
+        assert_eq!(f[1..6], [strong.to_string().as_str(); 5], "{sent}");
+        let mm = |i: usize| f[6 + i].parse::<u16>().unwrap();
+        assert!(mm(2).abs_diff(200) <= 10, "{sent}");
+        assert!(
+            mm(0) < 185,
+            "the others read the count as the datasheet's sensor: {sent}"
+        );
+        // And each telemetry line says so.
+        board.send("G 3000 0\n");
+        board.run(&mut rover, 200, false);
+        let t = board.sent();
+        assert!(t.lines().filter(|l| l.starts_with("T ")).count() > 0, "{t}");
+        assert!(
+            t.lines()
+                .filter(|l| l.starts_with("T "))
+                .all(|l| l.ends_with(" C")),
+            "{t}"
+        );
+
+        // A corrupt copy: the datasheet's curve, flagged.
+        let mut bad = stored;
+        bad[5] ^= 1;
+        let mut p = planner();
+        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut board = Mock::new();
+        board.stored = Some(bad);
+        assert_eq!(rover.load_calibration(&mut board), Source::Corrupt);
+        board.send("G 3000 0\n");
+        board.run(&mut rover, 200, false);
+        let t = board.sent();
+        assert!(t.lines().filter(|l| l.starts_with("T ")).count() > 0, "{t}");
+        assert!(
+            t.lines()
+                .filter(|l| l.starts_with("T "))
+                .all(|l| l.ends_with(" !")),
+            "{t}"
+        );
     }
 }

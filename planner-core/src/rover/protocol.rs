@@ -19,6 +19,7 @@
 //! | `M` | report memory (the AVR; the STM32 answers `ERR`) | `M stack_peak=<bytes>` |
 //! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below (the AVR's `replay` binary, which the emulator tests run; the STM32's emulated build replays a trace built in) | `OK` |
 //! | `D` | the sensors now: their raw counts, and what the planner reads from them | `D <c0> … <c4> <r0> … <r4>` |
+//! | `K <sensor> <gain_q8> <offset>` | sensor `sensor` (0–4)'s correction, fitted by the console from its counts with a card at 100, 200, … 800 mm (`crate::rover::calibration`): kept, used and stored on the board | `OK`; `ERR` if refused (a correction no working sensor needs), or kept but not stored (a board without storage) |
 //!
 //! `D` is for bringing a rover up: the five sensors in the pin map's order
 //! (−40° to +40°), first the ADC counts, then each count as the planner's
@@ -33,11 +34,13 @@
 //! refused in the state the rover is in (`P` while driving) gets `ERR`
 //! alone. Telemetry, one line per planner step (the STM32 also logs each
 //! step over defmt):
-//! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles>`
+//! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal>`
 //! with headings in binary angle units (65,536 = 360°) and status one of
 //! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault);
 //! `cycles` is the step as it ran, the interrupts that came during it
-//! included.
+//! included; `cal` the sensors' calibration: `C` each sensor's own, `-`
+//! the datasheet's (none stored), `!` the datasheet's because the stored
+//! one is corrupt.
 //!
 //! Replay mode (for bit-exactness and cycle counts from a recorded trace):
 //! the host sends frames of `0xA5`, the number `n` (u8, at most 8) of the
@@ -55,6 +58,7 @@
 
 use crate::eapf::config::Config;
 use crate::eapf::sensors::{RawCounts, Reading};
+use crate::rover::calibration::Correction;
 
 /// One parsed command line.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -72,6 +76,9 @@ pub enum Request {
     Replay(i16, i16),
     /// `D`: the sensors' counts and readings now.
     Sensors,
+    /// `K sensor gain_q8 offset`: sensor `sensor`'s correction, to keep
+    /// and store ([`crate::rover::calibration`]).
+    Calibrate(u8, Correction),
 }
 
 fn parse_i16(field: &[u8]) -> Option<i16> {
@@ -107,6 +114,13 @@ pub fn parse(line: &[u8]) -> Option<Request> {
         b"M" => Request::Memory,
         b"R" => Request::Replay(num()?, num()?),
         b"D" => Request::Sensors,
+        b"K" => Request::Calibrate(
+            u8::try_from(num()?).ok()?,
+            Correction {
+                gain_q8: u16::try_from(num()?).ok()?,
+                offset: num()?,
+            },
+        ),
         _ => return None,
     };
     match f.next() {
@@ -128,10 +142,7 @@ pub enum SensorField {
 }
 
 /// What the calibration reads from each of the counts `raw`, as the reply
-/// to `D` says it (see the table above). The firmwares write `D`, the five
-/// counts and these, each after a space, and `\n`: the STM32 by
-/// [`write_sensor_line`], the AVR with the number formatting its telemetry
-/// links already (ufmt); the words are the core's, the same on both.
+/// to `D` says it (see the table above).
 pub fn sensor_readings<'a>(
     cfg: &'a Config,
     raw: &'a RawCounts,
@@ -146,17 +157,17 @@ pub fn sensor_readings<'a>(
         })
 }
 
-/// The whole reply to `D` for the counts `raw`, `\n` ended, a byte at a
-/// time to `out`, numbers by [`write_number`]: what the STM32 sends, and
-/// what the tests hold the AVR's line (numbers by ufmt, which its telemetry
-/// links already) to.
-pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, out: &mut dyn FnMut(u8)) {
+/// The whole reply to `D`, `\n` ended, a byte at a time to `out`: the
+/// counts `raw`, then what the planner reads from `read` (the counts
+/// through the sensors' own calibration, [`crate::rover::calibration`];
+/// `raw` itself without one).
+pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, read: &RawCounts, out: &mut dyn FnMut(u8)) {
     out(b'D');
     for &c in raw {
         out(b' ');
         write_number(c.into(), out);
     }
-    for f in sensor_readings(cfg, raw) {
+    for f in sensor_readings(cfg, read) {
         out(b' ');
         match f {
             SensorField::Number(n) => write_number(n.into(), out),
@@ -212,6 +223,7 @@ pub struct LineReader {
 
 impl LineReader {
     /// An empty reader.
+    #[cfg_attr(target_arch = "avr", inline(never))]
     pub fn new() -> Self {
         LineReader::default()
     }
@@ -321,7 +333,7 @@ mod tests {
     /// The line as the STM32 writes it.
     fn line(cfg: &Config, raw: &RawCounts) -> std::string::String {
         let mut got = std::vec::Vec::new();
-        write_sensor_line(cfg, raw, &mut |b| got.push(b));
+        write_sensor_line(cfg, raw, raw, &mut |b| got.push(b));
         std::string::String::from_utf8(got).unwrap()
     }
 
