@@ -13,6 +13,7 @@
 //! progress bar, `rand_pcg` for seeded, portable random numbers.
 
 pub mod bench;
+pub mod console;
 pub mod fault;
 pub mod generate;
 pub mod geom;

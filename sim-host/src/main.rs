@@ -176,6 +176,35 @@ enum Cmd {
         #[arg(long, value_enum, default_value = "eapf")]
         planner: PlannerKind,
     },
+    /// Drive a rover that runs the firmware, over its serial port: set the
+    /// pose, send the goal, show a status line while it drives, log the
+    /// telemetry as CSV and draw the run. Ctrl-C stops the rover.
+    Drive {
+        /// The serial port (`/dev/ttyACM0`, `COM3`).
+        #[arg(long)]
+        port: String,
+        /// Its rate.
+        #[arg(long, default_value_t = 115_200)]
+        baud: u32,
+        /// The goal, mm.
+        #[arg(long, num_args = 2, allow_negative_numbers = true, required = true)]
+        goal: Vec<i16>,
+        /// The rover's pose first: x mm, y mm, heading in degrees.
+        #[arg(long, num_args = 3, allow_negative_numbers = true)]
+        pose: Option<Vec<i16>>,
+        /// Write the telemetry here as CSV.
+        #[arg(long)]
+        csv: Option<PathBuf>,
+        /// Draw the run here.
+        #[arg(long)]
+        svg: Option<PathBuf>,
+        /// The scenario to draw behind the run.
+        #[arg(long)]
+        world: Option<PathBuf>,
+        /// Give up after this long without a line from the rover, s.
+        #[arg(long, default_value_t = 10.0)]
+        silence_s: f64,
+    },
     /// Fit one sensor's calibration from its counts with a card at 100,
     /// 200, … 800 mm (the first five fields of the firmware's `D` lines),
     /// and print the `K` line that stores it on the board.
@@ -306,6 +335,110 @@ fn set_back_applies(set_back: bool, planners: &[PlannerKind]) -> Result<(), Stri
     }
 }
 
+/// What `drive` was asked.
+struct DriveArgs {
+    port: String,
+    baud: u32,
+    goal: (i16, i16),
+    pose: Option<(i16, i16, i16)>,
+    csv: Option<PathBuf>,
+    svg: Option<PathBuf>,
+    world: Option<PathBuf>,
+    silence_s: f64,
+}
+
+/// A serial port as the console's line link.
+struct SerialLink {
+    port: Box<dyn serialport::SerialPort>,
+    pending: Vec<u8>,
+    silence: std::time::Duration,
+}
+
+impl sim_host::console::Link for SerialLink {
+    fn send(&mut self, line: &str) -> Result<(), String> {
+        use std::io::Write;
+        self.port
+            .write_all(format!("{line}\n").as_bytes())
+            .map_err(|e| format!("serial: {e}"))
+    }
+
+    fn read_line(&mut self) -> Result<Option<String>, String> {
+        use std::io::Read;
+        let since = std::time::Instant::now();
+        let mut buf = [0u8; 256];
+        loop {
+            if let Some(i) = self.pending.iter().position(|&b| b == b'\n') {
+                let line: Vec<u8> = self.pending.drain(..=i).collect();
+                return Ok(Some(String::from_utf8_lossy(&line).trim_end().to_string()));
+            }
+            if since.elapsed() > self.silence {
+                return Ok(None);
+            }
+            match self.port.read(&mut buf) {
+                Ok(n) => self.pending.extend_from_slice(&buf[..n]),
+                Err(e) if e.kind() == std::io::ErrorKind::TimedOut => {}
+                Err(e) => return Err(format!("serial: {e}")),
+            }
+        }
+    }
+}
+
+/// The `drive` command.
+fn drive_rover(a: DriveArgs) -> Result<(), String> {
+    use sim_host::console::{self, Plan, CSV_HEADER};
+    use std::sync::atomic::AtomicBool;
+    use std::sync::Arc;
+    // Every input and output checked before the rover moves.
+    let world = a
+        .world
+        .as_deref()
+        .map(Scenario::load)
+        .transpose()
+        .map_err(|e| e.to_string())?;
+    let outputs: Vec<&Path> = [a.csv.as_deref(), a.svg.as_deref()]
+        .into_iter()
+        .flatten()
+        .collect();
+    let inputs: Vec<PathBuf> = a.world.iter().cloned().collect();
+    for out in &outputs {
+        output_ok(out, &inputs)?;
+    }
+    let port = serialport::new(&a.port, a.baud)
+        .timeout(std::time::Duration::from_millis(50))
+        .open()
+        .map_err(|e| format!("{}: {e}", a.port))?;
+    let mut link = SerialLink {
+        port,
+        pending: Vec::new(),
+        silence: std::time::Duration::from_secs_f64(a.silence_s.max(0.1)),
+    };
+    let stop = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&stop);
+    ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed))
+        .map_err(|e| format!("Ctrl-C: {e}"))?;
+    let status = indicatif::ProgressBar::new_spinner();
+    let plan = Plan {
+        pose: a.pose,
+        goal: a.goal,
+    };
+    let (records, end) = console::drive(&mut link, plan, &stop, |r| {
+        status.set_message(r.status_line(a.goal));
+        status.tick();
+    })?;
+    status.finish();
+    if let Some(path) = &a.csv {
+        let rows: Vec<String> = records.iter().map(console::Record::csv_row).collect();
+        write(path, &format!("{CSV_HEADER}\n{}\n", rows.join("\n")))?;
+    }
+    if let Some(path) = &a.svg {
+        write(
+            path,
+            &console::picture(&records, end, a.goal, world.as_ref()),
+        )?;
+    }
+    say(&format!("{end:?} after {} steps\n", records.len()))
+}
+
 /// A board's ADC.
 #[derive(Clone, Copy, clap::ValueEnum)]
 enum Adc {
@@ -341,6 +474,25 @@ fn real_main(cli: Cli) -> Result<(), String> {
             adc,
             counts,
         } => say(&calibrate(sensor, adc, &counts)?),
+        Cmd::Drive {
+            port,
+            baud,
+            goal,
+            pose,
+            csv,
+            svg,
+            world,
+            silence_s,
+        } => drive_rover(DriveArgs {
+            port,
+            baud,
+            goal: (goal[0], goal[1]),
+            pose: pose.map(|p| (p[0], p[1], p[2])),
+            csv,
+            svg,
+            world,
+            silence_s,
+        }),
         Cmd::Run {
             file,
             planner,

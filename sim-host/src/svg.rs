@@ -68,10 +68,16 @@ pub fn render(
         None if reference.is_some() => ratio += " (no way with the margin)",
         _ => {}
     }
+    // A run known from telemetry alone has no clearance to tell.
+    let clearance = if run.min_clearance.is_finite() {
+        format!(", min clearance {:.3} m", run.min_clearance)
+    } else {
+        String::new()
+    };
     let _ = writeln!(
         s,
-        r##"<text x="10" y="48" font-size="13" fill="#444">{} steps, path {:.2} m{ratio}, min clearance {:.3} m, {} virtual obstacles</text>"##,
-        run.steps, run.path_length, run.min_clearance, run.virtual_dropped
+        r##"<text x="10" y="48" font-size="13" fill="#444">{} steps, path {:.2} m{ratio}{clearance}, {} virtual obstacles</text>"##,
+        run.steps, run.path_length, run.virtual_dropped
     );
     frame.obstacles(&mut s, sc);
     // Moving circles: their runs (thin dashes), where they began (a

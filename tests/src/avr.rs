@@ -348,6 +348,174 @@ pub fn drive_set_back(sc: &sim_host::scenario::Scenario, seed: u64, max_s: f64) 
     drive_mounted(sc, seed, max_s, None, true)
 }
 
+/// The emulated rover of the closed loop: the firmware in simavr, its five
+/// ADC pins driven with sim-host's realistic sensor voltages for the true
+/// pose, its PWM and direction pins moving the rover (duty measured by
+/// sampling them every 16 µs), and the encoder edges the wheel travel
+/// makes; collisions checked with the swept disc.
+pub struct EmulatedRover {
+    /// The firmware.
+    pub a: Avr,
+    world: sim_host::world::World,
+    radius: f64,
+    sensors: sim_host::sensor::VirtualSensors,
+    unplug: Option<Unplug>,
+    /// True pose, m and rad.
+    pub p: sim_host::geom::V2,
+    h: f64,
+    /// Each wheel's encoder disc position, in ticks.
+    disc: (f64, f64),
+    /// Emulated time, s, and distance driven, m.
+    pub t: f64,
+    pub path: f64,
+    /// The disc touched an obstacle.
+    pub collided: bool,
+    /// Lines the firmware sent, not yet taken.
+    lines: std::collections::VecDeque<String>,
+}
+
+/// A millisecond, the closed loop's tick, s.
+const TICK_S: f64 = 0.001;
+
+impl EmulatedRover {
+    /// The firmware booted at `sc`'s start, the sensors on the rim or
+    /// `set_back` behind it (the firmware built alike), the heading rounded
+    /// to whole degrees (as `P` sets it): the `P` line for it, not sent.
+    pub fn new(
+        sc: &sim_host::scenario::Scenario,
+        seed: u64,
+        unplug: Option<Unplug>,
+        set_back: bool,
+    ) -> (EmulatedRover, String) {
+        use sim_host::geom::V2;
+        use sim_host::sensor::{SensorMode, VirtualSensors};
+        let adc = planner_core::AdcProfile::AVR_10BIT_5V;
+        // The firmware's geometry: its default configuration's.
+        let cfg = planner_core::ConfigBuilder::new(adc)
+            .sensors_set_back(set_back)
+            .build()
+            .expect("the default configuration");
+        let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
+        let offset_m = cfg.sensor_offset_mm() as f64 / 1e3;
+        let sensors = VirtualSensors::new(adc, SensorMode::REALISTIC, angles, offset_m, seed);
+        let elf = if set_back {
+            set_back_firmware_elf()
+        } else {
+            firmware_elf()
+        };
+        let (p, h) = (V2::new(sc.start[0], sc.start[1]), sc.start_heading_rad());
+        let pose = format!(
+            "P {} {} {}",
+            (p.x * 1e3).round(),
+            (p.y * 1e3).round(),
+            h.to_degrees().round()
+        );
+        let rover = EmulatedRover {
+            a: Avr::boot_elf(&elf),
+            world: sc.world(),
+            radius: sc.robot_radius,
+            sensors,
+            unplug,
+            p,
+            h: h.to_degrees().round().to_radians(),
+            disc: (0.5, 0.5),
+            t: 0.0,
+            path: 0.0,
+            collided: false,
+            lines: Default::default(),
+        };
+        (rover, pose)
+    }
+
+    /// One millisecond: the sensors' voltages for the true pose, the
+    /// firmware run, the rover moved as its pins say, the encoder edges.
+    /// The wheels' PWM samples that were high.
+    pub fn tick(&mut self) -> u32 {
+        // simavr's ADC reference is 3.3 V when the ELF does not declare
+        // AVCC: scale so that the firmware sees what a 5 V AVCC would give.
+        self.sensors.read(&self.world, self.p, self.h, self.t);
+        for (i, v) in self.sensors.volts().iter().enumerate() {
+            let unplugged = self
+                .unplug
+                .is_some_and(|u| u.sensor == i && self.t >= u.at_s);
+            let mv = if unplugged {
+                0
+            } else {
+                (v * 1_000.0 * 3_300.0 / 5_000.0)
+                    .round()
+                    .clamp(0.0, 3_300.0) as u32
+            };
+            let mut pins = self.a.avr.pins();
+            match i {
+                0 => pins.adc0().set_mv(mv),
+                1 => pins.adc1().set_mv(mv),
+                2 => pins.adc2().set_mv(mv),
+                3 => pins.adc3().set_mv(mv),
+                _ => pins.adc4().set_mv(mv),
+            }
+        }
+        let (vl, vr, pulses) = wheels_for_1ms(&mut self.a);
+        self.a.run_us(8); // collect serial output
+        let body = planner_core::rover::drive::Body::REFERENCE;
+        let base = body.wheel_base_mm() as f64 / 1e3;
+        let (q, h1) = sim_host::geom::differential_drive(self.p, self.h, vl, vr, base, TICK_S);
+        if self.world.static_sweep_clearance(self.p, q) <= self.radius {
+            self.collided = true;
+        }
+        self.path += self.p.dist(q);
+        (self.p, self.h) = (q, h1);
+        self.t += TICK_S;
+        // Encoder edges for the wheel travel (at most one per millisecond
+        // per wheel at this speed): a wheel that turns back over an edge it
+        // just passed makes that edge again, and one that stops short of the
+        // next makes none (the travel is not summed regardless of sign).
+        let m_per_tick = body.um_per_tick() as f64 / 1e6;
+        let was = (self.disc.0.floor(), self.disc.1.floor());
+        self.disc.0 += vl * TICK_S / m_per_tick;
+        self.disc.1 += vr * TICK_S / m_per_tick;
+        if self.disc.0.floor() != was.0 {
+            self.a.avr.pins().pd2().set_high();
+        }
+        if self.disc.1.floor() != was.1 {
+            self.a.avr.pins().pd3().set_high();
+        }
+        self.a.avr.run_for(64u64);
+        self.a.avr.pins().pd2().set_low();
+        self.a.avr.pins().pd3().set_low();
+        while let Some(i) = self.a.rx.iter().position(|&b| b == b'\n') {
+            let line: Vec<u8> = self.a.rx.drain(..=i).collect();
+            self.lines
+                .push_back(String::from_utf8_lossy(&line).trim_end().to_string());
+        }
+        pulses
+    }
+
+    /// The next line the firmware sent, if any.
+    pub fn take_line(&mut self) -> Option<String> {
+        self.lines.pop_front()
+    }
+}
+
+/// The console's link to the emulated rover: each line is sent to the
+/// firmware, and reading one runs the closed loop until a line comes (at
+/// most 10 emulated seconds).
+impl sim_host::console::Link for EmulatedRover {
+    fn send(&mut self, line: &str) -> Result<(), String> {
+        self.a.send(format!("{line}\n").as_bytes());
+        Ok(())
+    }
+
+    fn read_line(&mut self) -> Result<Option<String>, String> {
+        for _ in 0..10_000 {
+            if let Some(l) = self.take_line() {
+                return Ok(Some(l));
+            }
+            self.tick();
+        }
+        Ok(None)
+    }
+}
+
 /// [`drive_with`], the sensors on the rim or `set_back` behind it (the
 /// firmware built alike).
 fn drive_mounted(
@@ -357,104 +525,22 @@ fn drive_mounted(
     unplug: Option<Unplug>,
     set_back: bool,
 ) -> LoopRun {
-    use sim_host::geom::V2;
-    use sim_host::sensor::{SensorMode, VirtualSensors};
-    let world = sc.world();
-    let m_per_tick = planner_core::rover::drive::Body::REFERENCE.um_per_tick() as f64 / 1e6;
-    let base = planner_core::rover::drive::Body::REFERENCE.wheel_base_mm() as f64 / 1e3;
-    let adc = planner_core::AdcProfile::AVR_10BIT_5V;
-    // The firmware's geometry: its default configuration's.
-    let cfg = planner_core::ConfigBuilder::new(adc)
-        .sensors_set_back(set_back)
-        .build()
-        .expect("the default configuration");
-    let angles = [-40f64, -20.0, 0.0, 20.0, 40.0].map(f64::to_radians);
-    let offset_m = cfg.sensor_offset_mm() as f64 / 1e3;
-    let mut sensors = VirtualSensors::new(adc, SensorMode::REALISTIC, angles, offset_m, seed);
-    let elf = if set_back {
-        set_back_firmware_elf()
-    } else {
-        firmware_elf()
-    };
-    let mut a = Avr::boot_elf(&elf);
-    let (mut p, mut h) = (V2::new(sc.start[0], sc.start[1]), sc.start_heading_rad());
-    let start = format!(
-        "P {} {} {}",
-        (p.x * 1e3).round(),
-        (p.y * 1e3).round(),
-        h.to_degrees().round()
-    );
-    assert_eq!(a.request(&start).as_deref(), Some("OK"), "{start}");
-    // The odometry starts at the rounded heading: so does the rover.
-    h = h.to_degrees().round().to_radians();
-    let goal = V2::new(sc.goal[0], sc.goal[1]);
+    let (mut r, pose) = EmulatedRover::new(sc, seed, unplug, set_back);
+    assert_eq!(r.a.request(&pose).as_deref(), Some("OK"), "{pose}");
+    let goal = sim_host::geom::V2::new(sc.goal[0], sc.goal[1]);
     let go = format!("G {} {}", (goal.x * 1e3).round(), (goal.y * 1e3).round());
-    assert_eq!(a.request(&go).as_deref(), Some("OK"), "{go}");
-
-    // Each wheel's encoder disc position, in ticks: an edge wherever it
-    // crosses a whole tick, whichever way it turns (the firmware counts it
-    // in the direction it drives that wheel).
-    let (mut disc_l, mut disc_r) = (0.5f64, 0.5f64);
-    let mut path = 0.0;
+    assert_eq!(r.a.request(&go).as_deref(), Some("OK"), "{go}");
     let mut steps = 0;
-    let mut t = 0.0;
-    let dt = 0.001;
     let outcome = 'run: loop {
-        if t > max_s {
+        if r.t > max_s {
             break LoopOutcome::Timeout;
         }
-        // Sensor voltages for the true pose. simavr's ADC reference is
-        // 3.3 V when the ELF does not declare AVCC: scale so that the
-        // firmware sees what a 5 V AVCC would give.
-        sensors.read(&world, p, h, t);
-        for (i, v) in sensors.volts().iter().enumerate() {
-            let unplugged = unplug.is_some_and(|u| u.sensor == i && t >= u.at_s);
-            let mv = if unplugged {
-                0
-            } else {
-                (v * 1_000.0 * 3_300.0 / 5_000.0)
-                    .round()
-                    .clamp(0.0, 3_300.0) as u32
-            };
-            let mut pins = a.avr.pins();
-            match i {
-                0 => pins.adc0().set_mv(mv),
-                1 => pins.adc1().set_mv(mv),
-                2 => pins.adc2().set_mv(mv),
-                3 => pins.adc3().set_mv(mv),
-                _ => pins.adc4().set_mv(mv),
-            }
-        }
-        let (vl, vr, _) = wheels_for_1ms(&mut a);
-        a.run_us(8); // collect serial output
-        let (q, h1) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
-        if world.static_sweep_clearance(p, q) <= sc.robot_radius {
+        r.tick();
+        if r.collided {
             break LoopOutcome::Collision;
         }
-        path += p.dist(q);
-        p = q;
-        h = h1;
-        t += dt;
-        // Encoder edges for the wheel travel (at most one per millisecond
-        // per wheel at this speed): a wheel that turns back over an edge it
-        // just passed makes that edge again, and one that stops short of the
-        // next makes none (the travel is not summed regardless of sign).
-        let (was_l, was_r) = (disc_l.floor(), disc_r.floor());
-        disc_l += vl * dt / m_per_tick;
-        disc_r += vr * dt / m_per_tick;
-        if disc_l.floor() != was_l {
-            a.avr.pins().pd2().set_high();
-        }
-        if disc_r.floor() != was_r {
-            a.avr.pins().pd3().set_high();
-        }
-        a.avr.run_for(64u64);
-        a.avr.pins().pd2().set_low();
-        a.avr.pins().pd3().set_low();
         // Telemetry.
-        while let Some(i) = a.rx.iter().position(|&b| b == b'\n') {
-            let line: Vec<u8> = a.rx.drain(..=i).collect();
-            let line = String::from_utf8_lossy(&line);
+        while let Some(line) = r.take_line() {
             let f: Vec<&str> = line.split_whitespace().collect();
             if f.first() == Some(&"T") {
                 steps += 1;
@@ -475,26 +561,29 @@ fn drive_mounted(
         LoopOutcome::Reached | LoopOutcome::Unreachable | LoopOutcome::SensorFault
     )
     .then(|| {
-        let stopped_at = p;
+        let stopped_at = r.p;
         let mut high = 0;
         for ms in 0..102 {
-            let (vl, vr, pulses) = wheels_for_1ms(&mut a);
-            (p, h) = sim_host::geom::differential_drive(p, h, vl, vr, base, dt);
+            let pulses = r.tick();
             if ms >= 2 {
                 high += pulses;
             }
         }
-        (high, p.dist(stopped_at))
+        (high, r.p.dist(stopped_at))
     });
-    let stack_peak = after_stop.and_then(|_| a.stack_peak());
+    let stack_peak = after_stop.and_then(|_| r.a.stack_peak());
     LoopRun {
         outcome,
-        seconds: t,
-        path_m: path,
+        seconds: r.t,
+        path_m: r.path,
         steps,
-        to_goal_m: p.dist(goal),
+        to_goal_m: r.p.dist(goal),
         after_stop,
         stack_peak,
-        elf,
+        elf: if set_back {
+            set_back_firmware_elf()
+        } else {
+            firmware_elf()
+        },
     }
 }

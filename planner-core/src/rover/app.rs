@@ -496,6 +496,9 @@ mod tests {
     use std::string::String;
     use std::vec::Vec;
 
+    /// The reference rover on the ATmega328P's ADC.
+    const CFG: RoverConfig = RoverConfig::reference(AdcProfile::AVR_10BIT_5V);
+
     /// Counts that read "nothing in range", with a little noise.
     const CLEAR: u16 = 57;
 
@@ -530,6 +533,15 @@ mod tests {
                 tx: Vec::new(),
                 events: Vec::new(),
             }
+        }
+
+        /// A board whose rover has driven towards (3000, 0) mm for 0.8 s.
+        fn driving(rover: &mut Rover) -> Mock {
+            let mut board = Mock::new();
+            board.send("G 3000 0\n");
+            board.run(rover, 800, false);
+            assert!(rover.is_driving() && board.wheels != Wheels::STOP);
+            board
         }
 
         fn send(&mut self, line: &str) {
@@ -646,7 +658,7 @@ mod tests {
     #[test]
     fn a_goal_is_driven_to_then_the_motors_stop() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         board.send("P 100 -50 90\nG 700 300\n");
         let events = board.run(&mut rover, 30_000, true);
@@ -686,7 +698,7 @@ mod tests {
     fn a_sensor_fault_mid_run_stops_the_rover() {
         // An unplugged sensor reads 0: the planner's fault status.
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         board.fault_at_ms = Some((1_000, Some(0)));
         board.send("G 3000 0\n");
@@ -700,7 +712,7 @@ mod tests {
 
         // The converter fails: stopped at once, whatever the executor did.
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         board.fault_at_ms = Some((1_000, None));
         board.send("G 3000 0\n");
@@ -718,11 +730,8 @@ mod tests {
     #[test]
     fn a_line_that_is_not_a_command_stops_the_rover() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
-        let mut board = Mock::new();
-        board.send("G 3000 0\n");
-        board.run(&mut rover, 800, false);
-        assert!(rover.is_driving() && board.wheels != Wheels::STOP);
+        let mut rover = Rover::new(&mut p, CFG);
+        let mut board = Mock::driving(&mut rover);
         board.sent();
         board.send("G 30x0 0\n");
         board.ms += 1;
@@ -737,11 +746,8 @@ mod tests {
     #[test]
     fn a_stop_stops_the_motors_in_the_same_poll() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
-        let mut board = Mock::new();
-        board.send("G 3000 0\n");
-        board.run(&mut rover, 800, false);
-        assert!(board.wheels != Wheels::STOP);
+        let mut rover = Rover::new(&mut p, CFG);
+        let mut board = Mock::driving(&mut rover);
         let pose = rover.pose();
         board.sent();
         board.send("S\n");
@@ -759,7 +765,7 @@ mod tests {
     #[test]
     fn requests_are_answered_in_every_state() {
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(AdcProfile::AVR_10BIT_5V));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         // No sweep yet: no counts to show; this board reports no stack.
         board.send("D\nM\n");
@@ -796,7 +802,7 @@ mod tests {
     fn a_calibration_is_kept_stored_and_used_after_a_restart() {
         let adc = AdcProfile::AVR_10BIT_5V;
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         assert_eq!(rover.load_calibration(&mut board), Source::Datasheet);
         // Refused: a gain no sensor needs, an unknown sensor.
@@ -814,7 +820,7 @@ mod tests {
         // Power cycle: a new rover on the same board reads it back, and the
         // planner reads sensor 2's count as the datasheet's.
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         board.stored = Some(stored);
         assert_eq!(rover.load_calibration(&mut board), Source::Stored);
@@ -835,34 +841,32 @@ mod tests {
             "the others read the count as the datasheet's sensor: {sent}"
         );
         // And each telemetry line says so.
-        board.send("G 3000 0\n");
-        board.run(&mut rover, 200, false);
-        let t = board.sent();
-        assert!(t.lines().filter(|l| l.starts_with("T ")).count() > 0, "{t}");
-        assert!(
-            t.lines()
-                .filter(|l| l.starts_with("T "))
-                .all(|l| l.ends_with(" C")),
-            "{t}"
-        );
+        assert_eq!(calibration_letters(&mut rover, &mut board), "C");
 
         // A corrupt copy: the datasheet's curve, flagged.
         let mut bad = stored;
         bad[5] ^= 1;
         let mut p = planner();
-        let mut rover = Rover::new(&mut p, RoverConfig::reference(adc));
+        let mut rover = Rover::new(&mut p, CFG);
         let mut board = Mock::new();
         board.stored = Some(bad);
         assert_eq!(rover.load_calibration(&mut board), Source::Corrupt);
+        assert_eq!(calibration_letters(&mut rover, &mut board), "!");
+    }
+
+    /// The calibration letters the telemetry lines end in over 0.2 s of
+    /// driving, each letter once.
+    fn calibration_letters(rover: &mut Rover, board: &mut Mock) -> String {
         board.send("G 3000 0\n");
-        board.run(&mut rover, 200, false);
-        let t = board.sent();
-        assert!(t.lines().filter(|l| l.starts_with("T ")).count() > 0, "{t}");
-        assert!(
-            t.lines()
-                .filter(|l| l.starts_with("T "))
-                .all(|l| l.ends_with(" !")),
-            "{t}"
-        );
+        let until = board.ms + 200;
+        board.run(rover, until, false);
+        let mut letters: Vec<char> = board
+            .sent()
+            .lines()
+            .filter(|l| l.starts_with("T "))
+            .filter_map(|l| l.chars().last())
+            .collect();
+        letters.dedup();
+        letters.into_iter().collect()
     }
 }

@@ -1,0 +1,298 @@
+//! The host's console for a rover running the firmware (a real one over a
+//! serial port, or the emulated one): it sets the pose and the goal, reads
+//! the telemetry lines (`T …`, `planner_core::rover::protocol`), logs them
+//! as CSV and draws the run as the simulator draws its own.
+//!
+//! [`drive`] is the session, over any [`Link`] that carries the lines; the
+//! `drive` command runs it over a serial port.
+
+use crate::geom::V2;
+use crate::scenario::Scenario;
+use crate::sim::{Outcome, RunResult, TraceRow};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// A line link to the rover.
+pub trait Link {
+    /// Send one line (the `\n` is added).
+    fn send(&mut self, line: &str) -> Result<(), String>;
+    /// The next line received (without its end), or `None` if none came
+    /// within the link's wait.
+    fn read_line(&mut self) -> Result<Option<String>, String>;
+}
+
+/// One telemetry line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Record {
+    /// The rover's clock, ms.
+    pub ms: u32,
+    /// Odometry position, mm.
+    pub x_mm: i16,
+    /// Odometry position, mm.
+    pub y_mm: i16,
+    /// Heading, binary angle units (65,536 = 360°).
+    pub heading: u16,
+    /// `M`, `A`, `U` or `F`.
+    pub status: char,
+    /// Commanded heading, binary angle units.
+    pub cmd_heading: u16,
+    /// Commanded step, mm.
+    pub step_mm: u16,
+    /// The step's cycles on the rover.
+    pub cycles: u32,
+    /// The sensors' calibration: `C`, `-` or `!`.
+    pub cal: char,
+}
+
+/// The CSV log's header.
+pub const CSV_HEADER: &str =
+    "ms,x_mm,y_mm,heading_deg,status,cmd_heading_deg,step_mm,cycles,calibration";
+
+fn degrees(bam: u16) -> f64 {
+    bam as i16 as f64 * 360.0 / 65_536.0
+}
+
+impl Record {
+    /// The record of a telemetry line; `None` for any other line.
+    pub fn parse(line: &str) -> Option<Record> {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let [t, ms, x, y, h, s, ch, st, cy, cal] = f.as_slice() else {
+            return None;
+        };
+        let one = |s: &str| {
+            let mut c = s.chars();
+            c.next().filter(|_| c.next().is_none())
+        };
+        (*t == "T").then_some(())?;
+        Some(Record {
+            ms: ms.parse().ok()?,
+            x_mm: x.parse().ok()?,
+            y_mm: y.parse().ok()?,
+            heading: h.parse().ok()?,
+            status: one(s).filter(|c| "MAUF".contains(*c))?,
+            cmd_heading: ch.parse().ok()?,
+            step_mm: st.parse().ok()?,
+            cycles: cy.parse().ok()?,
+            cal: one(cal).filter(|c| "C-!".contains(*c))?,
+        })
+    }
+
+    /// Its row of the CSV log ([`CSV_HEADER`]).
+    pub fn csv_row(&self) -> String {
+        format!(
+            "{},{},{},{:.1},{},{:.1},{},{},{}",
+            self.ms,
+            self.x_mm,
+            self.y_mm,
+            degrees(self.heading),
+            self.status,
+            degrees(self.cmd_heading),
+            self.step_mm,
+            self.cycles,
+            self.cal
+        )
+    }
+
+    /// A one-line status for a terminal.
+    pub fn status_line(&self, goal: (i16, i16)) -> String {
+        let (dx, dy) = (
+            f64::from(goal.0) - f64::from(self.x_mm),
+            f64::from(goal.1) - f64::from(self.y_mm),
+        );
+        let what = match self.status {
+            'M' => "moving",
+            'A' => "arrived",
+            'U' => "unreachable",
+            _ => "sensor fault",
+        };
+        format!(
+            "t {:7.2} s  at ({:6}, {:6}) mm  {:6.1}°  {:5.2} m to go  step {:4} mm  {what}",
+            f64::from(self.ms) / 1e3,
+            self.x_mm,
+            self.y_mm,
+            degrees(self.heading),
+            dx.hypot(dy) / 1e3,
+            self.step_mm,
+        )
+    }
+}
+
+/// How a session ended.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum End {
+    /// The rover says it arrived.
+    Arrived,
+    /// The rover says the goal is unreachable.
+    Unreachable,
+    /// The rover stopped on a sensor fault.
+    SensorFault,
+    /// Stopped from the host (Ctrl-C): `S` was sent.
+    Stopped,
+    /// No telemetry for longer than the link waits, or no answer.
+    Silent,
+}
+
+/// What to ask the rover.
+#[derive(Clone, Copy, Debug)]
+pub struct Plan {
+    /// The pose to set first (mm, mm, degrees), if any.
+    pub pose: Option<(i16, i16, i16)>,
+    /// The goal, mm.
+    pub goal: (i16, i16),
+}
+
+/// Send `line` and wait for its `OK` (telemetry and other lines between are
+/// passed to `other`).
+fn request(link: &mut impl Link, line: &str, other: &mut impl FnMut(&str)) -> Result<(), String> {
+    link.send(line)?;
+    for _ in 0..1_000 {
+        match link.read_line()? {
+            Some(l) if l == "OK" => return Ok(()),
+            Some(l) if l == "ERR" => return Err(format!("the rover refused `{line}`")),
+            Some(l) => other(&l),
+            None => break,
+        }
+    }
+    Err(format!("no answer to `{line}`"))
+}
+
+/// Set the pose, send the goal and follow the telemetry until the rover
+/// stops, `stop` is set (then `S` is sent) or the link goes silent. Each
+/// record goes to `on_record` as it comes.
+pub fn drive(
+    link: &mut impl Link,
+    plan: Plan,
+    stop: &AtomicBool,
+    mut on_record: impl FnMut(&Record),
+) -> Result<(Vec<Record>, End), String> {
+    let mut ignore = |_: &str| {};
+    if let Some((x, y, deg)) = plan.pose {
+        request(link, &format!("P {x} {y} {deg}"), &mut ignore)?;
+    }
+    request(
+        link,
+        &format!("G {} {}", plan.goal.0, plan.goal.1),
+        &mut ignore,
+    )?;
+    let mut records = Vec::new();
+    loop {
+        if stop.load(Ordering::Relaxed) {
+            link.send("S")?;
+            return Ok((records, End::Stopped));
+        }
+        let Some(line) = link.read_line()? else {
+            return Ok((records, End::Silent));
+        };
+        let Some(r) = Record::parse(&line) else {
+            continue;
+        };
+        on_record(&r);
+        records.push(r);
+        let end = match r.status {
+            'A' => End::Arrived,
+            'U' => End::Unreachable,
+            'F' => End::SensorFault,
+            _ => continue,
+        };
+        return Ok((records, end));
+    }
+}
+
+/// The run as the simulator's pictures take it, from the telemetry: the
+/// odometry's path (not the true one: the rover knows no other), and how
+/// it ended.
+pub fn run_result(records: &[Record], end: End) -> RunResult {
+    let trace: Vec<TraceRow> = records
+        .iter()
+        .map(|r| TraceRow {
+            t: f64::from(r.ms) / 1e3,
+            x: f64::from(r.x_mm) / 1e3,
+            y: f64::from(r.y_mm) / 1e3,
+            heading: degrees(r.heading).to_radians(),
+        })
+        .collect();
+    let length = trace
+        .windows(2)
+        .map(|w| V2::new(w[0].x, w[0].y).dist(V2::new(w[1].x, w[1].y)))
+        .sum();
+    let outcome = match end {
+        End::Arrived => Outcome::Reached,
+        End::Unreachable => Outcome::Unreachable,
+        _ => Outcome::Timeout,
+    };
+    RunResult {
+        outcome,
+        steps: records.len(),
+        path_length: length,
+        duration_s: trace.last().map_or(0.0, |r| r.t),
+        // Unknown: the rover sees no clearance (the picture leaves it out).
+        min_clearance: f64::INFINITY,
+        contact: None,
+        trace,
+        seen: Vec::new(),
+        remembered: Vec::new(),
+        midpoint: None,
+        virtual_obstacles: Vec::new(),
+        virtual_dropped: 0,
+        sensor_faults: usize::from(end == End::SensorFault),
+        route: Vec::new(),
+    }
+}
+
+/// The picture of a logged run over `world`, or over an empty floor
+/// around the path and the goal.
+pub fn picture(records: &[Record], end: End, goal: (i16, i16), world: Option<&Scenario>) -> String {
+    let run = run_result(records, end);
+    let goal_m = [f64::from(goal.0) / 1e3, f64::from(goal.1) / 1e3];
+    let start = run.trace.first().map_or([0.0, 0.0], |r| [r.x, r.y]);
+    let floor;
+    let sc = match world {
+        Some(sc) => sc,
+        None => {
+            let xs = run.trace.iter().map(|r| r.x).chain([goal_m[0]]);
+            let ys = run.trace.iter().map(|r| r.y).chain([goal_m[1]]);
+            let (x0, x1) = xs.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+            let (y0, y1) = ys.fold((f64::MAX, f64::MIN), |(a, b), v| (a.min(v), b.max(v)));
+            floor = Scenario {
+                format: 1,
+                name: "the rover's run".into(),
+                description: None,
+                bounds: [x0 - 0.5, y0 - 0.5, x1 + 0.5, y1 + 0.5],
+                start,
+                start_heading: None,
+                goal: goal_m,
+                robot_radius: 0.1,
+                solvable: true,
+                circle: Vec::new(),
+                polygon: Vec::new(),
+                moving: Vec::new(),
+            };
+            &floor
+        }
+    };
+    crate::svg::render(sc, &run, "the rover's telemetry", None, None)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn telemetry_lines_parse_and_others_do_not() {
+        let r = Record::parse("T 1234 -50 300 16384 M 32768 120 15012 C").unwrap();
+        assert_eq!(
+            (r.ms, r.x_mm, r.y_mm, r.heading, r.status, r.step_mm, r.cycles, r.cal),
+            (1234, -50, 300, 16_384, 'M', 120, 15_012, 'C')
+        );
+        assert_eq!(r.csv_row(), "1234,-50,300,90.0,M,-180.0,120,15012,C");
+        for bad in [
+            "OK",
+            "T 1 2 3 4 M 5 6 7",
+            "T 1 2 3 4 X 5 6 7 C",
+            "T 1 2 3 4 M 5 6 7 CC",
+            "T 1 2 3 99999 M 5 6 7 C",
+            "D 1 2 3 4 5 - - - - -",
+        ] {
+            assert_eq!(Record::parse(bad), None, "{bad}");
+        }
+    }
+}

@@ -1,0 +1,92 @@
+//! The host console (`sim-host drive`, `sim_host::console`) against the
+//! ATmega328P firmware in simavr, closed loop: it sets the pose, sends the
+//! goal, follows the telemetry to the goal, logs it and draws it; Ctrl-C's
+//! stop reaches the rover.
+
+use rover_tests::avr::EmulatedRover;
+use rover_tests::scenario;
+use sim_host::console::{drive, picture, End, Plan, Record, CSV_HEADER};
+use sim_host::geom::V2;
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// The console's plan for `sc` from the pose line the rover starts at.
+fn plan(sc: &sim_host::scenario::Scenario, pose: &str) -> Plan {
+    let p: Vec<i16> = pose
+        .split(' ')
+        .skip(1)
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let mm = |m: f64| (m * 1e3).round() as i16;
+    Plan {
+        pose: Some((p[0], p[1], p[2])),
+        goal: (mm(sc.goal[0]), mm(sc.goal[1])),
+    }
+}
+
+#[test]
+fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
+    let sc = scenario("paper/env1-ex1.toml");
+    let (mut rover, pose) = EmulatedRover::new(&sc, 1, None, false);
+    let plan = plan(&sc, &pose);
+    let stop = AtomicBool::new(false);
+    let mut shown = Vec::new();
+    let (records, end) = drive(&mut rover, plan, &stop, |r| {
+        shown.push(r.status_line(plan.goal))
+    })
+    .unwrap();
+    assert_eq!(end, End::Arrived, "{:?}", records.last());
+    assert!(!rover.collided, "no collision");
+    let goal = V2::new(sc.goal[0], sc.goal[1]);
+    assert!(rover.p.dist(goal) < 0.2, "at {:?}", rover.p);
+    assert!(records.len() > 5 && shown.len() == records.len());
+    assert!(shown.last().unwrap().contains("arrived"), "{shown:?}");
+    // The log: one row per telemetry line, in order, each parsing back.
+    let rows: Vec<String> = records.iter().map(Record::csv_row).collect();
+    assert_eq!(CSV_HEADER.split(',').count(), rows[0].split(',').count());
+    assert!(records.windows(2).all(|w| w[0].ms < w[1].ms));
+    assert_eq!(records[0].cal, '-', "no calibration stored");
+    // The picture: the world behind the odometry's path, and how it ended.
+    let svg = picture(&records, end, plan.goal, Some(&sc));
+    assert!(
+        svg.starts_with("<svg") && svg.contains("reached"),
+        "{}",
+        &svg[..200]
+    );
+    assert!(svg.contains(&sc.name));
+    let out = std::env::temp_dir().join("rover-console-env1-ex1.svg");
+    std::fs::write(&out, &svg).unwrap();
+    println!(
+        "console: {} steps, {end:?}; the picture: {}",
+        records.len(),
+        out.display()
+    );
+}
+
+#[test]
+fn a_stop_from_the_console_stops_the_rover() {
+    let sc = scenario("paper/env1-ex1.toml");
+    let (mut rover, pose) = EmulatedRover::new(&sc, 2, None, false);
+    let plan = plan(&sc, &pose);
+    let stop = AtomicBool::new(false);
+    // Ctrl-C at the first step.
+    let (records, end) = drive(&mut rover, plan, &stop, |_| {
+        stop.store(true, Ordering::Relaxed)
+    })
+    .unwrap();
+    assert_eq!(end, End::Stopped);
+    assert_eq!(records.len(), 1);
+    // The `S` reaches the firmware: its OK, then the motors stay off.
+    let mut ok = false;
+    let mut high = 0;
+    for ms in 0..200 {
+        let pulses = rover.tick();
+        while let Some(l) = rover.take_line() {
+            ok |= l == "OK";
+        }
+        if ms >= 20 {
+            high += pulses;
+        }
+    }
+    assert!(ok, "S answered");
+    assert_eq!(high, 0, "motors off after the stop");
+}
