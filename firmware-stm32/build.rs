@@ -1,4 +1,5 @@
-//! Feeds the top-level `memory.x` (STM32F411: 512 KB flash, 128 KB RAM) to
+//! Feeds the top-level `memory.x` (STM32F411: 384 of its 512 KB of flash for
+//! the program, 128 KB RAM) to
 //! cortex-m-rt's `link.x`, and, for the QEMU build, the recorded input trace
 //! named by `ROVER_TRACE` (empty when unset).
 

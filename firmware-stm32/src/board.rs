@@ -26,9 +26,11 @@ use defmt_rtt as _;
 use panic_probe as _;
 use planner_core::eapf::sensors::OneShotSensors;
 use planner_core::rover::app::{self, Board, Event, Rover, RoverConfig, Sweep};
+use planner_core::rover::calibration::STORED_BYTES;
 use planner_core::rover::drive::Wheels;
 use planner_core::{AdcProfile, IrSensors, Planner, Point};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
+use stm32f4xx_hal::flash::{FlashExt, LockedFlash};
 use stm32f4xx_hal::pac::USART1;
 use stm32f4xx_hal::qei::Qei;
 use stm32f4xx_hal::serial::{Rx, Tx};
@@ -56,7 +58,21 @@ struct Parts<M, E, S> {
     sensors: S,
     tx: Tx<USART1>,
     rx: Rx<USART1>,
+    flash: LockedFlash,
+    watchdog: IndependentWatchdog,
 }
+
+/// The flash sector that keeps the sensors' calibration: the last of the
+/// STM32F411xE's 512 KB (sector 7, 128 KB at offset 0x6_0000), which
+/// `memory.x` leaves out of the program's flash.
+const CALIBRATION_SECTOR: u8 = 7;
+const CALIBRATION_OFFSET: usize = 0x6_0000;
+
+/// The watchdog's period, and the one it gets while a sector is erased:
+/// the CPU waits for the flash meanwhile, 1 to 4 s for 128 KB (RM0383,
+/// §3.5; the datasheet's t_ERASE128KB).
+const WATCHDOG_MS: u32 = 500;
+const ERASE_WATCHDOG_MS: u32 = 8_000;
 
 impl<M: FnMut(Wheels), E, S> app::Motors for Parts<M, E, S> {
     fn set(&mut self, wheels: Wheels) {
@@ -95,6 +111,30 @@ impl<M, E, S> app::Serial for Parts<M, E, S> {
 }
 
 impl<M: FnMut(Wheels), E: FnMut() -> (i16, i16), S: FnMut() -> Sweep> Board for Parts<M, E, S> {
+    fn load_calibration(&mut self, bytes: &mut [u8; STORED_BYTES]) -> bool {
+        let at = CALIBRATION_OFFSET..CALIBRATION_OFFSET + STORED_BYTES;
+        match self.flash.read().get(at) {
+            Some(stored) => {
+                bytes.copy_from_slice(stored);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// Erase the sector and program the bytes (the application stores
+    /// only while the rover stands still).
+    fn store_calibration(&mut self, bytes: &[u8; STORED_BYTES]) -> bool {
+        self.watchdog.start(ERASE_WATCHDOG_MS.millis());
+        let done = {
+            let mut flash = self.flash.unlocked();
+            flash.erase(CALIBRATION_SECTOR).is_ok()
+                && flash.program(CALIBRATION_OFFSET, bytes.iter()).is_ok()
+        };
+        self.watchdog.start(WATCHDOG_MS.millis());
+        done
+    }
+
     /// Each step and fault, over defmt.
     fn log(&mut self, event: Event) {
         match event {
@@ -182,7 +222,7 @@ pub fn run() -> ! {
     let (mut tx, rx) = serial.split();
 
     let mut watchdog = IndependentWatchdog::new(dp.IWDG);
-    watchdog.start(500.millis());
+    watchdog.start(WATCHDOG_MS.millis());
 
     // The cycle counter for the telemetry's step cycles.
     cp.DCB.enable_trace();
@@ -208,12 +248,12 @@ pub fn run() -> ! {
         sensors,
         tx,
         rx,
+        flash: LockedFlash::new(dp.FLASH),
+        watchdog,
     };
-    // No storage for the sensors' calibration on this board yet: the
-    // datasheet's curve (`K` is used until a reset, and answers `ERR`).
     rover.load_calibration(&mut parts);
     loop {
-        watchdog.feed();
+        parts.watchdog.feed();
         rover.poll(&mut parts);
     }
 }

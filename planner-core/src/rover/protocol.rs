@@ -19,7 +19,7 @@
 //! | `M` | report memory (the AVR; the STM32 answers `ERR`) | `M stack_peak=<bytes>` |
 //! | `R <x_mm> <y_mm>` | replay mode toward goal (x, y), see below (the AVR's `replay` binary, which the emulator tests run; the STM32's emulated build replays a trace built in) | `OK` |
 //! | `D` | the sensors now: their raw counts, and what the planner reads from them | `D <c0> … <c4> <r0> … <r4>` |
-//! | `K <sensor> <gain_q8> <offset>` | sensor `sensor` (0–4)'s correction, fitted by the console from its counts with a card at 100, 200, … 800 mm (`crate::rover::calibration`): kept, used and stored on the board | `OK`; `ERR` if refused (a correction no working sensor needs), or kept but not stored (a board without storage) |
+//! | `K <sensor> <gain_q8> <offset>` | sensor `sensor` (0–4)'s correction, fitted by the console from its counts with a card at 100, 200, … 800 mm (`crate::rover::calibration`): kept, used and stored on the board | `OK`; `ERR` if refused (a correction no working sensor needs, or the rover driving: a store blocks the loop), or kept but not stored (a board without storage) |
 //!
 //! `D` is for bringing a rover up: the five sensors in the pin map's order
 //! (−40° to +40°), first the ADC counts, then each count as the planner's
