@@ -21,7 +21,7 @@ pub trait Link {
 }
 
 /// One telemetry line.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct Record {
     /// The rover's clock, ms.
     pub ms: u32,
@@ -41,11 +41,48 @@ pub struct Record {
     pub cycles: u32,
     /// The sensors' calibration: `C`, `-` or `!`.
     pub cal: char,
+    /// The counts the planner read for the step.
+    pub counts: [u16; 5],
+    /// The guard's looks during the advance before the step that changed
+    /// what the planner keeps (`g` lines), oldest first.
+    pub looks: Vec<Look>,
+}
+
+/// A guard look the rover logged (`g <remaining_mm> <c0> … <c4>`).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Look {
+    /// The step still to go, mm.
+    pub remaining_mm: u16,
+    /// The counts the planner read.
+    pub counts: [u16; 5],
+}
+
+impl Look {
+    /// The look of a `g` line; `None` for any other line.
+    pub fn parse(line: &str) -> Option<Look> {
+        let f: Vec<&str> = line.split_whitespace().collect();
+        let ["g", remaining, counts @ ..] = f.as_slice() else {
+            return None;
+        };
+        Some(Look {
+            remaining_mm: remaining.parse().ok()?,
+            counts: five(counts)?,
+        })
+    }
+}
+
+/// Five counts.
+fn five(fields: &[&str]) -> Option<[u16; 5]> {
+    let v: Vec<u16> = fields
+        .iter()
+        .map(|c| c.parse().ok())
+        .collect::<Option<_>>()?;
+    v.try_into().ok()
 }
 
 /// The CSV log's header.
 pub const CSV_HEADER: &str =
-    "ms,x_mm,y_mm,heading_deg,status,cmd_heading_deg,step_mm,cycles,calibration";
+    "ms,x_mm,y_mm,heading_deg,status,cmd_heading_deg,step_mm,cycles,calibration,c0,c1,c2,c3,c4";
 
 fn degrees(bam: u16) -> f64 {
     bam as i16 as f64 * 360.0 / 65_536.0
@@ -55,7 +92,7 @@ impl Record {
     /// The record of a telemetry line; `None` for any other line.
     pub fn parse(line: &str) -> Option<Record> {
         let f: Vec<&str> = line.split_whitespace().collect();
-        let [t, ms, x, y, h, s, ch, st, cy, cal] = f.as_slice() else {
+        let [t, ms, x, y, h, s, ch, st, cy, cal, counts @ ..] = f.as_slice() else {
             return None;
         };
         let one = |s: &str| {
@@ -73,13 +110,16 @@ impl Record {
             step_mm: st.parse().ok()?,
             cycles: cy.parse().ok()?,
             cal: one(cal).filter(|c| "C-!".contains(*c))?,
+            counts: five(counts)?,
+            looks: Vec::new(),
         })
     }
 
     /// Its row of the CSV log ([`CSV_HEADER`]).
     pub fn csv_row(&self) -> String {
+        let c = self.counts;
         format!(
-            "{},{},{},{:.1},{},{:.1},{},{},{}",
+            "{},{},{},{:.1},{},{:.1},{},{},{},{},{},{},{},{}",
             self.ms,
             self.x_mm,
             self.y_mm,
@@ -88,7 +128,12 @@ impl Record {
             degrees(self.cmd_heading),
             self.step_mm,
             self.cycles,
-            self.cal
+            self.cal,
+            c[0],
+            c[1],
+            c[2],
+            c[3],
+            c[4]
         )
     }
 
@@ -174,6 +219,7 @@ pub fn drive(
         &mut ignore,
     )?;
     let mut records = Vec::new();
+    let mut looks = Vec::new();
     loop {
         if stop.load(Ordering::Relaxed) {
             link.send("S")?;
@@ -182,12 +228,18 @@ pub fn drive(
         let Some(line) = link.read_line()? else {
             return Ok((records, End::Silent));
         };
-        let Some(r) = Record::parse(&line) else {
+        if let Some(look) = Look::parse(&line) {
+            looks.push(look);
+            continue;
+        }
+        let Some(mut r) = Record::parse(&line) else {
             continue;
         };
+        r.looks = std::mem::take(&mut looks);
         on_record(&r);
+        let status = r.status;
         records.push(r);
-        let end = match r.status {
+        let end = match status {
             'A' => End::Arrived,
             'U' => End::Unreachable,
             'F' => End::SensorFault,
@@ -195,6 +247,40 @@ pub fn drive(
         };
         return Ok((records, end));
     }
+}
+
+/// The logged run replayed through the host's core, configured as the
+/// rover's firmware (`cfg`) and driving to `goal`: each step from its
+/// logged pose and counts, after the logged guard looks before it. The
+/// steps whose heading, step or status differ from the rover's (none: the
+/// core decides the same bit for bit everywhere).
+pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -> Vec<usize> {
+    use planner_core::{Angle, Planner, Point, Pose, Status};
+    let mut planner = Planner::new(cfg, Point::new(goal.0, goal.1));
+    let letter = |s: Status| match s {
+        Status::Moving => 'M',
+        Status::Arrived => 'A',
+        Status::Unreachable => 'U',
+        Status::SensorFault => 'F',
+    };
+    let mut differ = Vec::new();
+    for (i, r) in records.iter().enumerate() {
+        for look in &r.looks {
+            planner.guard_raw(&look.counts, look.remaining_mm);
+        }
+        let pose = Pose {
+            position: Point::new(r.x_mm, r.y_mm),
+            heading: Angle(r.heading),
+        };
+        let out = planner.step_raw(pose, &r.counts);
+        let same = out.command.heading.0 == r.cmd_heading
+            && out.command.step_mm == r.step_mm
+            && letter(out.status) == r.status;
+        if !same {
+            differ.push(i);
+        }
+    }
+    differ
 }
 
 /// The run as the simulator's pictures take it, from the telemetry: the
@@ -278,21 +364,36 @@ mod tests {
 
     #[test]
     fn telemetry_lines_parse_and_others_do_not() {
-        let r = Record::parse("T 1234 -50 300 16384 M 32768 120 15012 C").unwrap();
+        let r = Record::parse("T 1234 -50 300 16384 M 32768 120 15012 C 57 60 204 58 59").unwrap();
         assert_eq!(
             (r.ms, r.x_mm, r.y_mm, r.heading, r.status, r.step_mm, r.cycles, r.cal),
             (1234, -50, 300, 16_384, 'M', 120, 15_012, 'C')
         );
-        assert_eq!(r.csv_row(), "1234,-50,300,90.0,M,-180.0,120,15012,C");
+        assert_eq!(r.counts, [57, 60, 204, 58, 59]);
+        assert_eq!(
+            r.csv_row(),
+            "1234,-50,300,90.0,M,-180.0,120,15012,C,57,60,204,58,59"
+        );
+        assert_eq!(
+            Look::parse("g 88 1 2 3 4 5"),
+            Some(Look {
+                remaining_mm: 88,
+                counts: [1, 2, 3, 4, 5]
+            })
+        );
         for bad in [
             "OK",
-            "T 1 2 3 4 M 5 6 7",
-            "T 1 2 3 4 X 5 6 7 C",
-            "T 1 2 3 4 M 5 6 7 CC",
-            "T 1 2 3 99999 M 5 6 7 C",
+            "T 1 2 3 4 M 5 6 7 C 1 2 3 4",
+            "T 1 2 3 4 X 5 6 7 C 1 2 3 4 5",
+            "T 1 2 3 4 M 5 6 7 CC 1 2 3 4 5",
+            "T 1 2 3 99999 M 5 6 7 C 1 2 3 4 5",
+            "T 1 2 3 4 M 5 6 7 C 1 2 3 4 5 6",
             "D 1 2 3 4 5 - - - - -",
         ] {
             assert_eq!(Record::parse(bad), None, "{bad}");
+        }
+        for bad in ["g 1 2 3 4 5", "g 1 2 3 4 5 6 7", "G 1 2 3 4 5 6"] {
+            assert_eq!(Look::parse(bad), None, "{bad}");
         }
     }
 }

@@ -204,6 +204,12 @@ enum Cmd {
         /// Give up after this long without a line from the rover, s.
         #[arg(long, default_value_t = 10.0)]
         silence_s: f64,
+        /// The rover's ADC, for the replay through the host's core.
+        #[arg(long, value_enum, default_value = "avr")]
+        adc: Adc,
+        /// The firmware was built for sensors set back from the rim.
+        #[arg(long)]
+        set_back: bool,
     },
     /// Fit one sensor's calibration from its counts with a card at 100,
     /// 200, … 800 mm (the first five fields of the firmware's `D` lines),
@@ -345,6 +351,8 @@ struct DriveArgs {
     svg: Option<PathBuf>,
     world: Option<PathBuf>,
     silence_s: f64,
+    adc: Adc,
+    set_back: bool,
 }
 
 /// A serial port as the console's line link.
@@ -436,7 +444,21 @@ fn drive_rover(a: DriveArgs) -> Result<(), String> {
             &console::picture(&records, end, a.goal, world.as_ref()),
         )?;
     }
-    say(&format!("{end:?} after {} steps\n", records.len()))
+    // The log through the host's core, as the firmware is configured.
+    let cfg = planner_core::ConfigBuilder::new(a.adc.profile())
+        .sensors_set_back(a.set_back)
+        .build()
+        .map_err(|e| format!("configuration: {e:?}"))?;
+    let differ = console::replay(cfg, a.goal, &records);
+    say(&format!(
+        "{end:?} after {} steps; replayed through the host's core: {} of them decided differently{}\n",
+        records.len(),
+        differ.len(),
+        differ
+            .first()
+            .map(|i| format!(" (the first: step {i})"))
+            .unwrap_or_default()
+    ))
 }
 
 /// A board's ADC.
@@ -448,13 +470,19 @@ enum Adc {
     Stm32,
 }
 
+impl Adc {
+    fn profile(self) -> planner_core::AdcProfile {
+        match self {
+            Adc::Avr => planner_core::AdcProfile::AVR_10BIT_5V,
+            Adc::Stm32 => planner_core::AdcProfile::STM32_12BIT_3V3,
+        }
+    }
+}
+
 /// The `K` line for `sensor`'s `counts` at the card distances.
 fn calibrate(sensor: u8, adc: Adc, counts: &[u16]) -> Result<String, String> {
     use planner_core::rover::calibration::{datasheet_row, fit, Row, CARD_MM};
-    let adc = match adc {
-        Adc::Avr => planner_core::AdcProfile::AVR_10BIT_5V,
-        Adc::Stm32 => planner_core::AdcProfile::STM32_12BIT_3V3,
-    };
+    let adc = adc.profile();
     let row: Row = counts
         .try_into()
         .map_err(|_| format!("{} counts, not {}", counts.len(), CARD_MM.len()))?;
@@ -483,6 +511,8 @@ fn real_main(cli: Cli) -> Result<(), String> {
             svg,
             world,
             silence_s,
+            adc,
+            set_back,
         } => drive_rover(DriveArgs {
             port,
             baud,
@@ -492,6 +522,8 @@ fn real_main(cli: Cli) -> Result<(), String> {
             svg,
             world,
             silence_s,
+            adc,
+            set_back,
         }),
         Cmd::Run {
             file,

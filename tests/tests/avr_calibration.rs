@@ -28,7 +28,7 @@ fn telemetry_flag(avr: &mut Bare) -> String {
         }
     };
     assert_eq!(avr.request("S"), "OK");
-    t.rsplit(' ').next().unwrap().to_string()
+    t.split(' ').nth(9).unwrap().to_string()
 }
 
 /// Every sensor sees a card at 200 mm, and sensor 2 reads 20 % high there

@@ -5,7 +5,7 @@
 
 use rover_tests::avr::EmulatedRover;
 use rover_tests::scenario;
-use sim_host::console::{drive, picture, End, Plan, Record, CSV_HEADER};
+use sim_host::console::{drive, picture, replay, End, Plan, Record, CSV_HEADER};
 use sim_host::geom::V2;
 use std::sync::atomic::{AtomicBool, Ordering};
 
@@ -45,6 +45,14 @@ fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
     assert_eq!(CSV_HEADER.split(',').count(), rows[0].split(',').count());
     assert!(records.windows(2).all(|w| w[0].ms < w[1].ms));
     assert_eq!(records[0].cal, '-', "no calibration stored");
+    // The log replayed through the host's core, configured as the
+    // firmware: every step decided alike, bit for bit.
+    let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap();
+    assert_eq!(replay(cfg, plan.goal, &records), Vec::<usize>::new());
+    let looks: usize = records.iter().map(|r| r.looks.len()).sum();
+    println!("console: {looks} guard looks logged, the replay agrees on every step");
     // The picture: the world behind the odometry's path, and how it ended.
     let svg = picture(&records, end, plan.goal, Some(&sc));
     assert!(
@@ -89,4 +97,45 @@ fn a_stop_from_the_console_stops_the_rover() {
     }
     assert!(ok, "S answered");
     assert_eq!(high, 0, "motors off after the stop");
+}
+
+/// Through the U-trap the guard keeps flank points, and the rover logs the
+/// looks that did: with them the host's core decides every step as the
+/// firmware did; without them, or with a count changed, it does not.
+#[test]
+fn a_logged_run_replays_bit_for_bit_with_its_guard_looks() {
+    let sc = scenario("traps/u-trap.toml");
+    let (mut rover, pose) = EmulatedRover::new(&sc, 3, None, false);
+    let plan = plan(&sc, &pose);
+    let stop = AtomicBool::new(false);
+    let (records, end) = drive(&mut rover, plan, &stop, |_| {}).unwrap();
+    assert_eq!(end, End::Arrived);
+    let looks: usize = records.iter().map(|r| r.looks.len()).sum();
+    println!(
+        "console: u-trap, {} steps, {looks} guard looks logged",
+        records.len()
+    );
+    assert!(looks > 0, "no look changed the flank points");
+    let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap();
+    assert_eq!(replay(cfg, plan.goal, &records), Vec::<usize>::new());
+    // The replay is a check that can fail: without the looks, or with one
+    // count changed, some step differs.
+    let mut blind = records.clone();
+    blind.iter_mut().for_each(|r| r.looks.clear());
+    let mut changed = records.clone();
+    let i = changed.len() / 2;
+    changed[i].counts[2] = changed[i].counts[2].saturating_add(150);
+    let (blind, changed) = (
+        replay(cfg, plan.goal, &blind),
+        replay(cfg, plan.goal, &changed),
+    );
+    println!(
+        "console: without the looks {} steps differ, with a count changed {}",
+        blind.len(),
+        changed.len()
+    );
+    assert!(!blind.is_empty(), "the looks matter");
+    assert!(!changed.is_empty(), "a changed count is seen");
 }

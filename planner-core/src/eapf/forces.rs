@@ -30,6 +30,7 @@ pub fn obstacle_distance_mm(cfg: &Config, r: Reading) -> Option<u16> {
 /// Collision points (eqs. 7, 8): a detection at distance `D` from the centre
 /// along sensor angle `θs` counts when `D·|sin θs| ≤ radius + clearance`
 /// (inside the corridor, with our safety margin) and `D·cos θs ≤ step`.
+#[cfg_attr(target_arch = "avr", inline(never))]
 pub fn collision_points(
     cfg: &Config,
     readings: &Readings,

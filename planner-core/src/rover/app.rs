@@ -361,7 +361,7 @@ impl<'p> Rover<'p> {
                 output,
                 cycles,
             };
-            write_telemetry(&mut sink(board), &step, self.source);
+            write_telemetry(&mut sink(board), &step, self.source, &read);
             board.log(Event::Stepped(step));
             if step.output.status != Status::Moving {
                 // Arrived, unreachable or a sensor fault: safe stop.
@@ -370,8 +370,11 @@ impl<'p> Rover<'p> {
             }
             self.executor.start(step.output.command);
         }
-        let wheels = self.advance(now, pose);
+        let (wheels, look) = self.advance(now, pose);
         board.set(wheels);
+        if let Some(look) = look {
+            write_look(&mut sink(board), &look);
+        }
     }
 
     /// Keep the latest sweep; `false` if the sensors failed.
@@ -392,24 +395,63 @@ impl<'p> Rover<'p> {
 
     /// The executor's duties; the guard looks at a sweep it has not seen
     /// when a look is due.
+    /// A look that changed what the planner keeps (its flank points) is
+    /// returned, to be logged: a replay of the run needs it, and no other.
     #[cfg_attr(target_arch = "avr", inline(never))]
-    fn advance(&mut self, now: u32, pose: Pose) -> Wheels {
+    fn advance(&mut self, now: u32, pose: Pose) -> (Wheels, Option<Look>) {
         let due =
             self.unseen && now.wrapping_sub(self.last_guard_ms) >= self.guard_period_ms.into();
         let (planner, counts) = (&mut *self.planner, &self.counts);
         let (unseen, last_guard_ms) = (&mut self.unseen, &mut self.last_guard_ms);
         let (tables, source) = (&self.tables, self.source);
-        self.executor
+        let mut kept = None;
+        let wheels = self
+            .executor
             .tick(pose, self.odometry.travelled_mm(), |remaining_mm| {
                 match (due, counts) {
                     (true, Some(raw)) => {
                         *unseen = false;
                         *last_guard_ms = now;
-                        planner.guard_raw(&planner_counts(tables, source, raw), remaining_mm)
+                        let read = planner_counts(tables, source, raw);
+                        let before = planner.flank().changes();
+                        let guard = planner.guard_raw(&read, remaining_mm);
+                        if planner.flank().changes() != before {
+                            kept = Some(Look {
+                                remaining_mm,
+                                counts: read,
+                            });
+                        }
+                        guard
                     }
                     _ => Guard::Continue,
                 }
-            })
+            });
+        (wheels, kept)
+    }
+}
+
+/// A guard look: the step still to go and the counts it read.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Look {
+    /// The step still to go, mm.
+    pub remaining_mm: u16,
+    /// The counts the planner read.
+    pub counts: RawCounts,
+}
+
+/// `g <remaining_mm> <c0> … <c4>` ([`protocol`]).
+fn write_look(out: &mut dyn FnMut(u8), look: &Look) {
+    out(b'g');
+    write_field(out, look.remaining_mm.into());
+    write_counts(out, &look.counts);
+    out(b'\n');
+}
+
+/// Five counts, each after a space.
+#[inline(never)]
+fn write_counts(out: &mut dyn FnMut(u8), counts: &RawCounts) {
+    for &c in counts {
+        write_field(out, c.into());
     }
 }
 
@@ -468,9 +510,9 @@ fn write_field(out: &mut dyn FnMut(u8), v: u32) {
     protocol::write_number(v, out);
 }
 
-/// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal>`
+/// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal> <c0> … <c4>`
 /// ([`protocol`]), a byte at a time to `out`.
-fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source) {
+fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source, counts: &RawCounts) {
     let position = step.pose.position;
     let command = step.output.command;
     out(b'T');
@@ -487,6 +529,7 @@ fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source) {
     write_field(out, step.cycles);
     out(b' ');
     out(cal.letter());
+    write_counts(out, counts);
     out(b'\n');
 }
 
@@ -677,13 +720,15 @@ mod tests {
         let letters = statuses(&sent);
         assert_eq!(letters.len(), steps.len());
         assert!(letters.ends_with('A') && letters[..letters.len() - 1].chars().all(|c| c == 'M'));
-        // Each telemetry line is its step's.
+        // Each telemetry line is its step's, with the counts it read (the
+        // first sweep's, at 38 ms).
         let first = sent.lines().find(|l| l.starts_with("T ")).unwrap();
         let s = steps[0];
+        let c = CLEAR + 1;
         assert_eq!(
             first,
             std::format!(
-                "T {} 100 -50 {} M {} {} 0 -",
+                "T {} 100 -50 {} M {} {} 0 - {c} {c} {c} {c} {c}",
                 s.ms,
                 s.pose.heading.0,
                 s.output.command.heading.0,
@@ -859,7 +904,7 @@ mod tests {
         assert_eq!(calibration_letters(&mut rover, &mut board), "!");
     }
 
-    /// The calibration letters the telemetry lines end in over 0.2 s of
+    /// The calibration letters of the telemetry lines over 0.2 s of
     /// driving, each letter once.
     fn calibration_letters(rover: &mut Rover, board: &mut Mock) -> String {
         board.send("G 3000 0\n");
@@ -869,7 +914,7 @@ mod tests {
             .sent()
             .lines()
             .filter(|l| l.starts_with("T "))
-            .filter_map(|l| l.chars().last())
+            .filter_map(|l| l.split(' ').nth(9)?.chars().next())
             .collect();
         letters.dedup();
         letters.into_iter().collect()

@@ -34,13 +34,17 @@
 //! refused in the state the rover is in (`P` while driving) gets `ERR`
 //! alone. Telemetry, one line per planner step (the STM32 also logs each
 //! step over defmt):
-//! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal>`
+//! `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal> <c0> … <c4>`
 //! with headings in binary angle units (65,536 = 360°) and status one of
 //! `M` (moving), `A` (arrived), `U` (unreachable), `F` (sensor fault);
 //! `cycles` is the step as it ran, the interrupts that came during it
 //! included; `cal` the sensors' calibration: `C` each sensor's own, `-`
 //! the datasheet's (none stored), `!` the datasheet's because the stored
-//! one is corrupt.
+//! one is corrupt; `c0 … c4` the counts the step read. During an advance,
+//! each guard look that changed what the planner keeps (its flank points)
+//! is logged as `g <remaining_mm> <c0> … <c4>`: with the `T` lines, enough
+//! to replay the run through the host's core, bit for bit (the console's
+//! `replay`).
 //!
 //! Replay mode (for bit-exactness and cycle counts from a recorded trace):
 //! the host sends frames of `0xA5`, the number `n` (u8, at most 8) of the
