@@ -249,21 +249,31 @@ pub fn drive(
     }
 }
 
+/// A logged run replayed through the host's core.
+#[derive(Clone, Debug, Default)]
+pub struct Replay {
+    /// The steps whose heading, step or status differ from the rover's
+    /// (none: the core decides the same bit for bit everywhere).
+    pub differ: Vec<usize>,
+    /// What the planner saw and kept, as the simulator's pictures show it:
+    /// the collision points of every step, then at the end the remembered
+    /// points, their midpoint, the virtual obstacles and how many were
+    /// dropped.
+    pub seen: Vec<V2>,
+    /// See [`Replay::seen`].
+    pub diagnostics: crate::planners::Diagnostics,
+}
+
 /// The logged run replayed through the host's core, configured as the
 /// rover's firmware (`cfg`) and driving to `goal`: each step from its
-/// logged pose and counts, after the logged guard looks before it. The
-/// steps whose heading, step or status differ from the rover's (none: the
-/// core decides the same bit for bit everywhere).
-pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -> Vec<usize> {
-    use planner_core::{Angle, Planner, Point, Pose, Status};
+/// logged pose and counts, after the logged guard looks before it.
+pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -> Replay {
+    use crate::units::to_v2;
+    use planner_core::rover::app::status_letter;
+    use planner_core::{Angle, Planner, Point, Pose};
     let mut planner = Planner::new(cfg, Point::new(goal.0, goal.1));
-    let letter = |s: Status| match s {
-        Status::Moving => 'M',
-        Status::Arrived => 'A',
-        Status::Unreachable => 'U',
-        Status::SensorFault => 'F',
-    };
-    let mut differ = Vec::new();
+    let mut out = Replay::default();
+    let mut at = V2::new(0.0, 0.0);
     for (i, r) in records.iter().enumerate() {
         for look in &r.looks {
             planner.guard_raw(&look.counts, look.remaining_mm);
@@ -272,21 +282,29 @@ pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -
             position: Point::new(r.x_mm, r.y_mm),
             heading: Angle(r.heading),
         };
-        let out = planner.step_raw(pose, &r.counts);
-        let same = out.command.heading.0 == r.cmd_heading
-            && out.command.step_mm == r.step_mm
-            && letter(out.status) == r.status;
+        at = to_v2(pose.position);
+        let step = planner.step_raw(pose, &r.counts);
+        let same = step.command.heading.0 == r.cmd_heading
+            && step.command.step_mm == r.step_mm
+            && char::from(status_letter(step.status)) == r.status;
         if !same {
-            differ.push(i);
+            out.differ.push(i);
+        }
+        for &q in planner.last_collision_points() {
+            let q = to_v2(q);
+            if out.seen.iter().all(|s| s.dist(q) > 0.03) {
+                out.seen.push(q);
+            }
         }
     }
-    differ
+    out.diagnostics = crate::planners::eapf_diagnostics(&planner, at);
+    out
 }
 
 /// The run as the simulator's pictures take it, from the telemetry: the
-/// odometry's path (not the true one: the rover knows no other), and how
-/// it ended.
-pub fn run_result(records: &[Record], end: End) -> RunResult {
+/// odometry's path (not the true one: the rover knows no other), how it
+/// ended, and what the planner saw and kept if the run was `replayed`.
+pub fn run_result(records: &[Record], end: End, replayed: Option<&Replay>) -> RunResult {
     let trace: Vec<TraceRow> = records
         .iter()
         .map(|r| TraceRow {
@@ -305,6 +323,8 @@ pub fn run_result(records: &[Record], end: End) -> RunResult {
         End::Unreachable => Outcome::Unreachable,
         _ => Outcome::Timeout,
     };
+    let r = replayed.cloned().unwrap_or_default();
+    let (remembered, midpoint, virtual_obstacles, virtual_dropped) = r.diagnostics;
     RunResult {
         outcome,
         steps: records.len(),
@@ -314,20 +334,27 @@ pub fn run_result(records: &[Record], end: End) -> RunResult {
         min_clearance: f64::INFINITY,
         contact: None,
         trace,
-        seen: Vec::new(),
-        remembered: Vec::new(),
-        midpoint: None,
-        virtual_obstacles: Vec::new(),
-        virtual_dropped: 0,
+        seen: r.seen,
+        remembered,
+        midpoint,
+        virtual_obstacles,
+        virtual_dropped,
         sensor_faults: usize::from(end == End::SensorFault),
         route: Vec::new(),
     }
 }
 
 /// The picture of a logged run over `world`, or over an empty floor
-/// around the path and the goal.
-pub fn picture(records: &[Record], end: End, goal: (i16, i16), world: Option<&Scenario>) -> String {
-    let run = run_result(records, end);
+/// around the path and the goal; with what the planner saw and kept if
+/// the run was `replayed`.
+pub fn picture(
+    records: &[Record],
+    end: End,
+    goal: (i16, i16),
+    world: Option<&Scenario>,
+    replayed: Option<&Replay>,
+) -> String {
+    let run = run_result(records, end, replayed);
     let goal_m = [f64::from(goal.0) / 1e3, f64::from(goal.1) / 1e3];
     let start = run.trace.first().map_or([0.0, 0.0], |r| [r.x, r.y]);
     let floor;

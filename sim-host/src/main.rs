@@ -178,39 +178,9 @@ enum Cmd {
     },
     /// Drive a rover that runs the firmware, over its serial port: set the
     /// pose, send the goal, show a status line while it drives, log the
-    /// telemetry as CSV and draw the run. Ctrl-C stops the rover.
-    Drive {
-        /// The serial port (`/dev/ttyACM0`, `COM3`).
-        #[arg(long)]
-        port: String,
-        /// Its rate.
-        #[arg(long, default_value_t = 115_200)]
-        baud: u32,
-        /// The goal, mm.
-        #[arg(long, num_args = 2, allow_negative_numbers = true, required = true)]
-        goal: Vec<i16>,
-        /// The rover's pose first: x mm, y mm, heading in degrees.
-        #[arg(long, num_args = 3, allow_negative_numbers = true)]
-        pose: Option<Vec<i16>>,
-        /// Write the telemetry here as CSV.
-        #[arg(long)]
-        csv: Option<PathBuf>,
-        /// Draw the run here.
-        #[arg(long)]
-        svg: Option<PathBuf>,
-        /// The scenario to draw behind the run.
-        #[arg(long)]
-        world: Option<PathBuf>,
-        /// Give up after this long without a line from the rover, s.
-        #[arg(long, default_value_t = 10.0)]
-        silence_s: f64,
-        /// The rover's ADC, for the replay through the host's core.
-        #[arg(long, value_enum, default_value = "avr")]
-        adc: Adc,
-        /// The firmware was built for sensors set back from the rim.
-        #[arg(long)]
-        set_back: bool,
-    },
+    /// telemetry as CSV, replay it through the host's core and draw the
+    /// run. Ctrl-C stops the rover.
+    Drive(DriveArgs),
     /// Fit one sensor's calibration from its counts with a card at 100,
     /// 200, … 800 mm (the first five fields of the firmware's `D` lines),
     /// and print the `K` line that stores it on the board.
@@ -341,17 +311,38 @@ fn set_back_applies(set_back: bool, planners: &[PlannerKind]) -> Result<(), Stri
     }
 }
 
-/// What `drive` was asked.
+/// What `drive` is asked.
+#[derive(clap::Args)]
 struct DriveArgs {
+    /// The serial port (`/dev/ttyACM0`, `COM3`).
+    #[arg(long)]
     port: String,
+    /// Its rate.
+    #[arg(long, default_value_t = 115_200)]
     baud: u32,
-    goal: (i16, i16),
-    pose: Option<(i16, i16, i16)>,
+    /// The goal, mm.
+    #[arg(long, num_args = 2, allow_negative_numbers = true, required = true)]
+    goal: Vec<i16>,
+    /// The rover's pose first: x mm, y mm, heading in degrees.
+    #[arg(long, num_args = 3, allow_negative_numbers = true)]
+    pose: Option<Vec<i16>>,
+    /// Write the telemetry here as CSV.
+    #[arg(long)]
     csv: Option<PathBuf>,
+    /// Draw the run here.
+    #[arg(long)]
     svg: Option<PathBuf>,
+    /// The scenario to draw behind the run.
+    #[arg(long)]
     world: Option<PathBuf>,
+    /// Give up after this long without a line from the rover, s.
+    #[arg(long, default_value_t = 10.0)]
     silence_s: f64,
+    /// The rover's ADC, for the replay through the host's core.
+    #[arg(long, value_enum, default_value = "avr")]
     adc: Adc,
+    /// The firmware was built for sensors set back from the rim.
+    #[arg(long)]
     set_back: bool,
 }
 
@@ -425,12 +416,13 @@ fn drive_rover(a: DriveArgs) -> Result<(), String> {
     ctrlc::set_handler(move || flag.store(true, std::sync::atomic::Ordering::Relaxed))
         .map_err(|e| format!("Ctrl-C: {e}"))?;
     let status = indicatif::ProgressBar::new_spinner();
+    let goal = (a.goal[0], a.goal[1]);
     let plan = Plan {
-        pose: a.pose,
-        goal: a.goal,
+        pose: a.pose.as_ref().map(|p| (p[0], p[1], p[2])),
+        goal,
     };
     let (records, end) = console::drive(&mut link, plan, &stop, |r| {
-        status.set_message(r.status_line(a.goal));
+        status.set_message(r.status_line(goal));
         status.tick();
     })?;
     status.finish();
@@ -438,18 +430,17 @@ fn drive_rover(a: DriveArgs) -> Result<(), String> {
         let rows: Vec<String> = records.iter().map(console::Record::csv_row).collect();
         write(path, &format!("{CSV_HEADER}\n{}\n", rows.join("\n")))?;
     }
-    if let Some(path) = &a.svg {
-        write(
-            path,
-            &console::picture(&records, end, a.goal, world.as_ref()),
-        )?;
-    }
     // The log through the host's core, as the firmware is configured.
     let cfg = planner_core::ConfigBuilder::new(a.adc.profile())
         .sensors_set_back(a.set_back)
         .build()
         .map_err(|e| format!("configuration: {e:?}"))?;
-    let differ = console::replay(cfg, a.goal, &records);
+    let replayed = console::replay(cfg, goal, &records);
+    if let Some(path) = &a.svg {
+        let svg = console::picture(&records, end, goal, world.as_ref(), Some(&replayed));
+        write(path, &svg)?;
+    }
+    let differ = replayed.differ;
     say(&format!(
         "{end:?} after {} steps; replayed through the host's core: {} of them decided differently{}\n",
         records.len(),
@@ -502,29 +493,7 @@ fn real_main(cli: Cli) -> Result<(), String> {
             adc,
             counts,
         } => say(&calibrate(sensor, adc, &counts)?),
-        Cmd::Drive {
-            port,
-            baud,
-            goal,
-            pose,
-            csv,
-            svg,
-            world,
-            silence_s,
-            adc,
-            set_back,
-        } => drive_rover(DriveArgs {
-            port,
-            baud,
-            goal: (goal[0], goal[1]),
-            pose: pose.map(|p| (p[0], p[1], p[2])),
-            csv,
-            svg,
-            world,
-            silence_s,
-            adc,
-            set_back,
-        }),
+        Cmd::Drive(a) => drive_rover(a),
         Cmd::Run {
             file,
             planner,

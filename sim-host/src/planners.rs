@@ -275,22 +275,27 @@ impl SimPlanner {
     /// (remembered points, midpoint of the active ones with the robot at
     /// `robot`, virtual obstacles, virtual obstacles dropped in all).
     pub fn diagnostics(&self, robot: V2) -> Diagnostics {
-        let Some(core) = self.eapf() else {
-            return (Vec::new(), None, Vec::new(), 0);
-        };
-        let rem = core.memory().iter().map(|r| to_v2(r.point)).collect();
-        let mid = core
-            .memory()
-            .midpoint(to_point(robot), core.goal())
-            .map(to_v2);
-        let vr = core.config().escape().radius_mm as f64 / 1000.0;
-        let vos = core
-            .escape()
-            .obstacles()
-            .map(|v| (to_v2(v.centre), vr))
-            .collect();
-        (rem, mid, vos, core.escape().dropped() as usize)
+        match self.eapf() {
+            Some(core) => eapf_diagnostics(core, robot),
+            None => (Vec::new(), None, Vec::new(), 0),
+        }
     }
+}
+
+/// [`SimPlanner::diagnostics`] of the product planner `core`.
+pub fn eapf_diagnostics(core: &Planner, robot: V2) -> Diagnostics {
+    let rem = core.memory().iter().map(|r| to_v2(r.point)).collect();
+    let mid = core
+        .memory()
+        .midpoint(to_point(robot), core.goal())
+        .map(to_v2);
+    let vr = core.config().escape().radius_mm as f64 / 1000.0;
+    let vos = core
+        .escape()
+        .obstacles()
+        .map(|v| (to_v2(v.centre), vr))
+        .collect();
+    (rem, mid, vos, core.escape().dropped() as usize)
 }
 
 #[cfg(test)]

@@ -50,11 +50,11 @@ fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
     let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
         .build()
         .unwrap();
-    assert_eq!(replay(cfg, plan.goal, &records), Vec::<usize>::new());
-    let looks: usize = records.iter().map(|r| r.looks.len()).sum();
-    println!("console: {looks} guard looks logged, the replay agrees on every step");
-    // The picture: the world behind the odometry's path, and how it ended.
-    let svg = picture(&records, end, plan.goal, Some(&sc));
+    let replayed = replay(cfg, plan.goal, &records);
+    assert_eq!(replayed.differ, Vec::<usize>::new());
+    // The picture: the world behind the odometry's path, how it ended, and
+    // what the replayed planner saw.
+    let svg = picture(&records, end, plan.goal, Some(&sc), Some(&replayed));
     assert!(
         svg.starts_with("<svg") && svg.contains("reached"),
         "{}",
@@ -119,7 +119,19 @@ fn a_logged_run_replays_bit_for_bit_with_its_guard_looks() {
     let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
         .build()
         .unwrap();
-    assert_eq!(replay(cfg, plan.goal, &records), Vec::<usize>::new());
+    let replayed = replay(cfg, plan.goal, &records);
+    assert_eq!(replayed.differ, Vec::<usize>::new());
+    assert!(
+        !replayed.seen.is_empty(),
+        "the collision points the planner saw"
+    );
+    let out = std::env::temp_dir().join("rover-console-u-trap.svg");
+    std::fs::write(
+        &out,
+        picture(&records, end, plan.goal, Some(&sc), Some(&replayed)),
+    )
+    .unwrap();
+    println!("console: the picture: {}", out.display());
     // The replay is a check that can fail: without the looks, or with one
     // count changed, some step differs.
     let mut blind = records.clone();
@@ -128,8 +140,8 @@ fn a_logged_run_replays_bit_for_bit_with_its_guard_looks() {
     let i = changed.len() / 2;
     changed[i].counts[2] = changed[i].counts[2].saturating_add(150);
     let (blind, changed) = (
-        replay(cfg, plan.goal, &blind),
-        replay(cfg, plan.goal, &changed),
+        replay(cfg, plan.goal, &blind).differ,
+        replay(cfg, plan.goal, &changed).differ,
     );
     println!(
         "console: without the looks {} steps differ, with a count changed {}",
