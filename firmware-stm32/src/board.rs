@@ -26,7 +26,7 @@ use defmt_rtt as _;
 use panic_probe as _;
 use planner_core::eapf::sensors::OneShotSensors;
 use planner_core::rover::app::{self, Board, Event, Rover, RoverConfig, Sweep};
-use planner_core::rover::calibration::STORED_BYTES;
+use planner_core::rover::calibration::{self, STORED_BYTES};
 use planner_core::rover::drive::Wheels;
 use planner_core::{AdcProfile, IrSensors, Planner, Point};
 use stm32f4xx_hal::adc::{config::AdcConfig, Adc};
@@ -62,11 +62,10 @@ struct Parts<M, E, S> {
     watchdog: IndependentWatchdog,
 }
 
-/// The flash sector that keeps the sensors' calibration: the last of the
-/// STM32F411xE's 512 KB (sector 7, 128 KB at offset 0x6_0000), which
+/// Where the sensors' calibration is kept: the start of the STM32F411xE's
+/// last flash sector (sector 7, 128 KB at offset 0x6_0000), which
 /// `memory.x` leaves out of the program's flash.
-const CALIBRATION_SECTOR: u8 = 7;
-const CALIBRATION_OFFSET: usize = 0x6_0000;
+const CALIBRATION_OFFSET: u32 = 0x6_0000;
 
 /// The watchdog's period, and the one it gets while a sector is erased:
 /// the CPU waits for the flash meanwhile, 1 to 4 s for 128 KB (RM0383,
@@ -112,25 +111,15 @@ impl<M, E, S> app::Serial for Parts<M, E, S> {
 
 impl<M: FnMut(Wheels), E: FnMut() -> (i16, i16), S: FnMut() -> Sweep> Board for Parts<M, E, S> {
     fn load_calibration(&mut self, bytes: &mut [u8; STORED_BYTES]) -> bool {
-        let at = CALIBRATION_OFFSET..CALIBRATION_OFFSET + STORED_BYTES;
-        match self.flash.read().get(at) {
-            Some(stored) => {
-                bytes.copy_from_slice(stored);
-                true
-            }
-            None => false,
-        }
+        calibration::load_from_flash(&mut self.flash, CALIBRATION_OFFSET, bytes)
     }
 
-    /// Erase the sector and program the bytes (the application stores
-    /// only while the rover stands still).
+    /// Erase the sector and write the bytes (the application stores only
+    /// while the rover stands still).
     fn store_calibration(&mut self, bytes: &[u8; STORED_BYTES]) -> bool {
         self.watchdog.start(ERASE_WATCHDOG_MS.millis());
-        let done = {
-            let mut flash = self.flash.unlocked();
-            flash.erase(CALIBRATION_SECTOR).is_ok()
-                && flash.program(CALIBRATION_OFFSET, bytes.iter()).is_ok()
-        };
+        let done =
+            calibration::store_in_flash(&mut self.flash.unlocked(), CALIBRATION_OFFSET, bytes);
         self.watchdog.start(WATCHDOG_MS.millis());
         done
     }

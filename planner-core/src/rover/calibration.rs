@@ -19,6 +19,7 @@
 //! which ([`Source`]).
 
 use crate::eapf::sensors::{AdcProfile, RawCounts, GP2Y0A21_MV_MM, SENSOR_COUNT, SIGNAL_FLOOR_MV};
+use embedded_storage::nor_flash::{NorFlash, ReadNorFlash};
 
 /// How many card distances a measurement has.
 pub const CARD_POINTS: usize = GP2Y0A21_MV_MM.len();
@@ -261,6 +262,25 @@ impl Corrections {
     }
 }
 
+/// The stored corrections read from a NOR flash at `offset` (the STM32
+/// keeps them in a sector of its own): `false` if it cannot be read.
+pub fn load_from_flash<F: ReadNorFlash>(
+    flash: &mut F,
+    offset: u32,
+    bytes: &mut [u8; STORED_BYTES],
+) -> bool {
+    flash.read(offset, bytes).is_ok()
+}
+
+/// Store `bytes` in a NOR flash at `offset`: the erase sector holding it
+/// is erased first (NOR bits are only cleared by a write), so it must hold
+/// nothing else.
+pub fn store_in_flash<F: NorFlash>(flash: &mut F, offset: u32, bytes: &[u8; STORED_BYTES]) -> bool {
+    let size = F::ERASE_SIZE as u32;
+    let sector = offset - offset % size;
+    flash.erase(sector, sector + size).is_ok() && flash.write(offset, bytes).is_ok()
+}
+
 /// A 16-bit checksum: each byte added to a sum rotated a bit left, so
 /// that a byte changed, lost or moved changes it; seeded so that an erased
 /// store (every byte 0xff or 0) fails.
@@ -352,6 +372,70 @@ mod tests {
         }
         assert!(read(&[0xff; STORED_BYTES]).is_err());
         assert!(read(&[0; STORED_BYTES]).is_err());
+    }
+
+    /// A NOR flash in RAM, as a chip behaves: erased bytes read 0xff, a
+    /// write only clears bits, an erase takes whole sectors of 1 KB.
+    struct Nor(std::vec::Vec<u8>);
+
+    impl embedded_storage::nor_flash::ErrorType for Nor {
+        type Error = embedded_storage::nor_flash::NorFlashErrorKind;
+    }
+
+    impl ReadNorFlash for Nor {
+        const READ_SIZE: usize = 1;
+        fn read(&mut self, offset: u32, bytes: &mut [u8]) -> Result<(), Self::Error> {
+            let at = offset as usize;
+            let got = self.0.get(at..at + bytes.len());
+            bytes.copy_from_slice(got.ok_or(Self::Error::OutOfBounds)?);
+            Ok(())
+        }
+        fn capacity(&self) -> usize {
+            self.0.len()
+        }
+    }
+
+    impl NorFlash for Nor {
+        const WRITE_SIZE: usize = 1;
+        const ERASE_SIZE: usize = 1024;
+        fn erase(&mut self, from: u32, to: u32) -> Result<(), Self::Error> {
+            if !from.is_multiple_of(1024) || !to.is_multiple_of(1024) {
+                return Err(Self::Error::NotAligned);
+            }
+            self.0[from as usize..to as usize].fill(0xff);
+            Ok(())
+        }
+        fn write(&mut self, offset: u32, bytes: &[u8]) -> Result<(), Self::Error> {
+            for (cell, b) in self.0[offset as usize..].iter_mut().zip(bytes) {
+                *cell &= b;
+            }
+            Ok(())
+        }
+    }
+
+    #[test]
+    fn corrections_are_stored_in_a_nor_flash_sector_and_read_back() {
+        let mut nor = Nor(std::vec![0xff; 4 * 1024]);
+        let mut none = [0; STORED_BYTES];
+        assert!(load_from_flash(&mut nor, 2 * 1024, &mut none));
+        assert!(none.iter().all(|&b| b == 0xff), "erased: none stored");
+        let mut all = Corrections::none(ADC);
+        all.set(2, fit(ADC, &unit(111, -4)).unwrap()).unwrap();
+        // Twice, the second over the first (which only an erase allows),
+        // and the sector's neighbours untouched.
+        nor.0[1023] = 0x42;
+        for k in [fit(ADC, &unit(90, 7)).unwrap(), Correction::NONE] {
+            all.set(4, k).unwrap();
+            assert!(store_in_flash(&mut nor, 2 * 1024 + 16, &all.to_bytes()));
+            let mut back = [0; STORED_BYTES];
+            assert!(load_from_flash(&mut nor, 2 * 1024 + 16, &mut back));
+            let mut read = Corrections::none(ADC);
+            assert_eq!(read.load(&back), Ok(()));
+            assert_eq!(read, all);
+        }
+        assert_eq!(nor.0[1023], 0x42);
+        // Past its end: cannot be read.
+        assert!(!load_from_flash(&mut nor, 4 * 1024 - 4, &mut none));
     }
 
     proptest! {
