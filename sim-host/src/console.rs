@@ -3,12 +3,15 @@
 //! the telemetry lines (`T …`, `planner_core::rover::protocol`), logs them
 //! as CSV and draws the run as the simulator draws its own.
 //!
-//! [`drive`] is the session, over any [`Link`] that carries the lines; the
-//! `drive` command runs it over a serial port.
+//! [`drive`] drives the rover over any [`Link`] that carries the lines;
+//! the `drive` command runs it over a serial port.
 
 use crate::geom::V2;
 use crate::scenario::Scenario;
 use crate::sim::{Outcome, RunResult, TraceRow};
+use crate::units::to_rad;
+pub use planner_core::rover::app::Look;
+use planner_core::Angle;
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A line link to the rover.
@@ -48,27 +51,17 @@ pub struct Record {
     pub looks: Vec<Look>,
 }
 
-/// A guard look the rover logged (`g <remaining_mm> <c0> … <c4>`).
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Look {
-    /// The step still to go, mm.
-    pub remaining_mm: u16,
-    /// The counts the planner read.
-    pub counts: [u16; 5],
-}
-
-impl Look {
-    /// The look of a `g` line; `None` for any other line.
-    pub fn parse(line: &str) -> Option<Look> {
-        let f: Vec<&str> = line.split_whitespace().collect();
-        let ["g", remaining, counts @ ..] = f.as_slice() else {
-            return None;
-        };
-        Some(Look {
-            remaining_mm: remaining.parse().ok()?,
-            counts: five(counts)?,
-        })
-    }
+/// The guard look a `g <remaining_mm> <c0> … <c4>` line logs (the
+/// application's [`Look`]); `None` for any other line.
+pub fn parse_look(line: &str) -> Option<Look> {
+    let f: Vec<&str> = line.split_whitespace().collect();
+    let ["g", remaining, counts @ ..] = f.as_slice() else {
+        return None;
+    };
+    Some(Look {
+        remaining_mm: remaining.parse().ok()?,
+        counts: five(counts)?,
+    })
 }
 
 /// Five counts.
@@ -85,7 +78,7 @@ pub const CSV_HEADER: &str =
     "ms,x_mm,y_mm,heading_deg,status,cmd_heading_deg,step_mm,cycles,calibration,c0,c1,c2,c3,c4";
 
 fn degrees(bam: u16) -> f64 {
-    bam as i16 as f64 * 360.0 / 65_536.0
+    to_rad(Angle(bam)).to_degrees()
 }
 
 impl Record {
@@ -161,7 +154,7 @@ impl Record {
     }
 }
 
-/// How a session ended.
+/// How a drive ended.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum End {
     /// The rover says it arrived.
@@ -228,7 +221,7 @@ pub fn drive(
         let Some(line) = link.read_line()? else {
             return Ok((records, End::Silent));
         };
-        if let Some(look) = Look::parse(&line) {
+        if let Some(look) = parse_look(&line) {
             looks.push(look);
             continue;
         }
@@ -270,7 +263,7 @@ pub struct Replay {
 pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -> Replay {
     use crate::units::to_v2;
     use planner_core::rover::app::status_letter;
-    use planner_core::{Angle, Planner, Point, Pose};
+    use planner_core::{Planner, Point, Pose};
     let mut planner = Planner::new(cfg, Point::new(goal.0, goal.1));
     let mut out = Replay::default();
     let mut at = V2::new(0.0, 0.0);
@@ -311,7 +304,7 @@ pub fn run_result(records: &[Record], end: End, replayed: Option<&Replay>) -> Ru
             t: f64::from(r.ms) / 1e3,
             x: f64::from(r.x_mm) / 1e3,
             y: f64::from(r.y_mm) / 1e3,
-            heading: degrees(r.heading).to_radians(),
+            heading: to_rad(Angle(r.heading)),
         })
         .collect();
     let length = trace
@@ -402,7 +395,7 @@ mod tests {
             "1234,-50,300,90.0,M,-180.0,120,15012,C,57,60,204,58,59"
         );
         assert_eq!(
-            Look::parse("g 88 1 2 3 4 5"),
+            parse_look("g 88 1 2 3 4 5"),
             Some(Look {
                 remaining_mm: 88,
                 counts: [1, 2, 3, 4, 5]
@@ -420,7 +413,7 @@ mod tests {
             assert_eq!(Record::parse(bad), None, "{bad}");
         }
         for bad in ["g 1 2 3 4 5", "g 1 2 3 4 5 6 7", "G 1 2 3 4 5 6"] {
-            assert_eq!(Look::parse(bad), None, "{bad}");
+            assert_eq!(parse_look(bad), None, "{bad}");
         }
     }
 }

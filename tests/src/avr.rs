@@ -372,6 +372,8 @@ pub struct EmulatedRover {
     pub collided: bool,
     /// Lines the firmware sent, not yet taken.
     lines: std::collections::VecDeque<String>,
+    /// The image it runs.
+    pub elf: PathBuf,
 }
 
 /// A millisecond, the closed loop's tick, s.
@@ -412,6 +414,7 @@ impl EmulatedRover {
         );
         let rover = EmulatedRover {
             a: Avr::boot_elf(&elf),
+            elf,
             world: sc.world(),
             radius: sc.robot_radius,
             sensors,
@@ -580,10 +583,6 @@ fn drive_mounted(
         to_goal_m: r.p.dist(goal),
         after_stop,
         stack_peak,
-        elf: if set_back {
-            set_back_firmware_elf()
-        } else {
-            firmware_elf()
-        },
+        elf: r.elf,
     }
 }

@@ -206,11 +206,6 @@ impl Corrections {
         }
     }
 
-    /// Sensor `sensor`'s correction.
-    pub fn get(&self, sensor: usize) -> Option<Correction> {
-        self.each.get(sensor).copied()
-    }
-
     /// Take `k` for sensor `sensor` if a working sensor can need it.
     pub fn set(&mut self, sensor: usize, k: Correction) -> Result<(), CalibrationError> {
         let k = k.check(self.full)?;
