@@ -9,6 +9,19 @@ use crate::{clock, serial};
 use core::sync::atomic::{compiler_fence, Ordering};
 use planner_core::{Angle, Guard, Output, Point, Pose, RawCounts};
 
+/// The cycles answered for a span too long to time exactly (65,536 cycles
+/// or more with interrupts off: `clock::arm_lap`).
+pub const UNTIMED: u32 = u32::MAX;
+
+/// A span's cycles less the timing's own, [`UNTIMED`] kept as it is.
+fn less(cycles: u32, overhead: u32) -> u32 {
+    if cycles == UNTIMED {
+        UNTIMED
+    } else {
+        cycles.saturating_sub(overhead)
+    }
+}
+
 /// What replay mode runs: a timed guard look on a sample, and a timed step.
 pub trait Replay {
     /// The guard's verdict on raw counts with `remaining_mm` to go, and
@@ -27,7 +40,7 @@ fn read_raw() -> RawCounts {
 }
 
 /// Serve frames with `r`; the cost of the timing itself is subtracted
-/// from the step's cycles.
+/// from the step's cycles ([`UNTIMED`] stays as it is).
 pub fn serve(r: &mut impl Replay) {
     // With interrupts off: an interrupt here would make every step of
     // this replay read short (a received byte did: 146 cycles a step).
@@ -46,7 +59,7 @@ pub fn serve(r: &mut impl Replay) {
             if verdict == Guard::Stop {
                 stops |= 1u8.wrapping_shl(i as u32);
             }
-            guard_worst = guard_worst.max(cycles.saturating_sub(overhead));
+            guard_worst = guard_worst.max(less(cycles, overhead));
         }
         let x = serial::read_u16_le() as i16;
         let y = serial::read_u16_le() as i16;
@@ -61,7 +74,7 @@ pub fn serve(r: &mut impl Replay) {
         serial::write_all(&out.command.heading.0.to_le_bytes());
         serial::write_all(&out.command.step_mm.to_le_bytes());
         serial::write(out.status.code());
-        serial::write_all(&cycles.saturating_sub(overhead).to_le_bytes());
+        serial::write_all(&less(cycles, overhead).to_le_bytes());
         serial::write(stops);
         serial::write_all(&guard_worst.to_le_bytes());
     }

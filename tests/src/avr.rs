@@ -189,6 +189,13 @@ impl Avr {
                     String::from_utf8_lossy(&self.rx)
                 )
             });
+            // The firmware times a span exactly below 65,536 cycles, and
+            // says when one was longer rather than send a wrong count.
+            assert!(
+                answer.cycles != UNTIMED && answer.guard_cycles != UNTIMED,
+                "replay frame {k}: a step or guard look ran 65,536 cycles or more, \
+                 longer than the firmware can time"
+            );
             got.push(answer);
         }
         self.send(&[0x00]);
@@ -206,6 +213,10 @@ pub fn replay_frame(f: &Frame) -> Vec<u8> {
     f.encode_le(&mut msg);
     msg
 }
+
+/// The cycles a replay answer gives for a span the firmware could not
+/// time: 65,536 cycles or more (`firmware-avr/src/replay.rs`).
+pub const UNTIMED: u32 = u32::MAX;
 
 /// Bytes of the firmware's answer to a replay frame.
 pub const REPLAY_ANSWER_LEN: usize = 15;

@@ -4,9 +4,54 @@
 //! the operands of every 32-bit multiply and division read.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{replay_firmware_elf, Avr};
-use rover_tests::profile::{profile, OWN_CODE};
-use rover_tests::{at_new_position, standard_traces};
+use rover_tests::avr::{replay_firmware_elf, set_back_replay_firmware_elf, Avr};
+use rover_tests::profile::{profile, Profile, OWN_CODE};
+use rover_tests::{at_new_position, standard_traces, standard_traces_with};
+
+/// The profiled span is the whole call (entry to return), the timed one
+/// the planner step between two clock reads inside it: the same few cycles
+/// more on every step, or the firmware's timing counts something that is
+/// not the step (an interrupt, a clock read that costs more on some
+/// values, a missed overflow). Those few cycles.
+fn timing_overhead(p: &Profile) -> i64 {
+    let around: Vec<i64> = p
+        .step_counted
+        .iter()
+        .zip(&p.step_cycles)
+        .map(|(&counted, &timed)| counted as i64 - i64::from(timed))
+        .collect();
+    assert!(
+        around.iter().all(|&a| a == around[0]) && (0..400).contains(&around[0]),
+        "profiled minus timed cycles differ between steps: {:?}",
+        {
+            let mut d = around.clone();
+            d.sort();
+            d.dedup();
+            d
+        }
+    );
+    around[0]
+}
+
+/// The set-back build's steps run past half of Timer1's period, where the
+/// counter's value alone no longer tells whether an overflow left pending
+/// (interrupts are off) came before the read or just after it: the
+/// firmware reads the flag on both sides (`clock::stamp`), and its timed
+/// steps are the profiled ones here too.
+#[test]
+fn the_set_back_steps_past_half_the_period_are_timed_exactly() {
+    let traces = standard_traces_with(AdcProfile::AVR_10BIT_5V, true);
+    let p = profile(&set_back_replay_firmware_elf(), &traces);
+    assert_eq!(p.mismatches, 0, "the firmware's commands are the host's");
+    let frames: usize = traces.iter().map(|t| t.frames.len()).sum();
+    assert_eq!(p.step_counted.len(), frames, "one counted step per frame");
+    let long = p.step_cycles.iter().filter(|&&c| c > 32_768).count();
+    println!(
+        "avr set-back profile: {long} steps over 32,768 cycles, the profiled call {} cycles more than each timed step",
+        timing_overhead(&p)
+    );
+    assert!(long > 0, "a step past half the period");
+}
 
 #[test]
 fn the_profile_accounts_for_the_timed_steps() {
@@ -43,26 +88,8 @@ fn the_profile_accounts_for_the_timed_steps() {
     // something that is not the step (an interrupt, a clock read that
     // costs more on some values, a missed overflow).
     assert_eq!(p.step_counted.len(), frames, "one counted step per frame");
-    let around: Vec<i64> = p
-        .step_counted
-        .iter()
-        .zip(&p.step_cycles)
-        .map(|(&counted, &timed)| counted as i64 - i64::from(timed))
-        .collect();
-    println!(
-        "avr profile: the profiled call is {} cycles more than the timed step, first step",
-        around[0]
-    );
-    assert!(
-        around.iter().all(|&a| a == around[0]) && (0..400).contains(&around[0]),
-        "profiled minus timed cycles differ between steps: {:?}",
-        {
-            let mut d = around.clone();
-            d.sort();
-            d.dedup();
-            d
-        }
-    );
+    let around = timing_overhead(&p);
+    println!("avr profile: the profiled call is {around} cycles more than the timed step");
     let split = |v: &[(String, u64)]| v.iter().map(|(_, c)| c).sum::<u64>();
     assert_eq!(split(&p.by_function), p.cycles, "each cycle charged once");
     assert_eq!(split(&p.by_callee), p.cycles, "each cycle charged once");

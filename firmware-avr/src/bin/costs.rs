@@ -42,6 +42,11 @@ use planner_core::fixed::{hypot, inverse_square_force, isqrt};
 use planner_core::{Angle, Reading};
 use ufmt::uwriteln;
 
+/// Timings of the long span, and its square roots (`isqrt(10^6)`, 873
+/// cycles each: about 59,000 cycles, past half of the 65,536).
+const LONG_SPANS: i32 = 16;
+const LONG_SPAN_ROOTS: u8 = 68;
+
 #[panic_handler]
 fn panic(_: &core::panic::PanicInfo) -> ! {
     bench::halt()
@@ -159,6 +164,37 @@ fn main() -> ! {
             });
             report("vo_force", held as i32, 0, t);
         }
+    }
+    // The clock over a span longer than half of Timer1's period, timed
+    // with interrupts off as the replay times a step, from different
+    // points of the period (each report line moves the next start): where
+    // the overflow comes more than half a period before the span ends, the
+    // counter alone no longer tells whether it came before the read.
+    for k in 0..LONG_SPANS {
+        let t = avr_device::interrupt::free(|_| {
+            timed(overhead, &mut || {
+                let mut x = 0;
+                for _ in 0..LONG_SPAN_ROOTS {
+                    x ^= isqrt(black_box(1_000_000)) as i32;
+                }
+                (x, 0)
+            })
+        });
+        report("long_span", k, 0, t);
+    }
+    // The lap flag (`clock::arm_lap`) over the long span, and over one
+    // twice as long, past the counter's period: only the second laps.
+    for roots in [LONG_SPAN_ROOTS, 2 * LONG_SPAN_ROOTS] {
+        let t = avr_device::interrupt::free(|_| {
+            clock::arm_lap();
+            timed(overhead, &mut || {
+                for _ in 0..roots {
+                    black_box(isqrt(black_box(1_000_000)));
+                }
+                (i32::from(clock::lapped()), 0)
+            })
+        });
+        report("lap", roots as i32, 0, t);
     }
     let _ = uwriteln!(Serial, "END");
     bench::halt()

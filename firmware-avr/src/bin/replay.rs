@@ -43,14 +43,32 @@ fn panic(_: &core::panic::PanicInfo) -> ! {
 /// received byte (146) inside the span would be counted too, depending on
 /// when the harness's bytes arrived. The clock still reads exactly: one
 /// overflow pending while interrupts are off is counted by
-/// `clock::Stamp::cycles`, and the replayed spans are far below the 65,536
-/// cycles between two overflows (the profiler's own count checks this,
+/// `clock::Stamp::cycles`. A span of 65,536 cycles or more can hide a
+/// second one; the lap flag (`clock::arm_lap`) catches it, and the span is
+/// answered [`replay::UNTIMED`] (the profiler's own count checks the rest,
 /// `tests/tests/avr_profile.rs`).
 struct Timed<'a>(&'a mut Planner);
 
+/// `span` with interrupts off and the lap flag armed: its result and
+/// cycles, or [`replay::UNTIMED`] if it came round.
+fn lap_checked<T>(span: impl FnOnce() -> (T, u32)) -> (T, u32) {
+    avr_device::interrupt::free(|_| {
+        clock::arm_lap();
+        let (t, cycles) = span();
+        (
+            t,
+            if clock::lapped() {
+                replay::UNTIMED
+            } else {
+                cycles
+            },
+        )
+    })
+}
+
 impl replay::Replay for Timed<'_> {
     fn guard(&mut self, raw: &RawCounts, remaining_mm: u16) -> (Guard, u32) {
-        avr_device::interrupt::free(|_| {
+        lap_checked(|| {
             let t0 = clock::stamp();
             compiler_fence(Ordering::SeqCst);
             let g = self.0.guard_raw(
@@ -64,7 +82,7 @@ impl replay::Replay for Timed<'_> {
         })
     }
     fn step(&mut self, pose: Pose, raw: &RawCounts) -> (Output, u32) {
-        avr_device::interrupt::free(|_| timed::step(self.0, pose, raw))
+        lap_checked(|| timed::step(self.0, pose, raw))
     }
 }
 
