@@ -240,7 +240,7 @@ proptest! {
         goal in (-20_000i16..20_000, -20_000i16..20_000),
     ) {
         let cfg = ConfigBuilder::new(AdcProfile::AVR_10BIT_5V).build().unwrap();
-        let near = cfg.calibration(2).unwrap().full_scale() / 2 + 100;
+        let near = cfg.calibration().full_scale() / 2 + 100;
         let mut world = World::new(seed, near);
         let mut p = Planner::new(cfg, Point::new(goal.0, goal.1));
         let mut pose = Pose::default();
@@ -271,7 +271,7 @@ proptest! {
                 let verdict = p.guard_raw(&raw, step - done);
                 let mut ranged = *p.last_readings();
                 for (r, c) in ranged.iter_mut().zip(raw) {
-                    *r = cfg.calibration(0).unwrap().reading(c);
+                    *r = cfg.calibration().reading(c);
                     if *r == Reading::TooClose {
                         *r = Reading::Clear;
                     }

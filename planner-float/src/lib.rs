@@ -159,12 +159,10 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
         }
     }
 
-    /// Sensor `i`'s reading of `raw`, interpolating the same calibration
+    /// A sensor's reading of `raw`, interpolating the same calibration
     /// bins as the fixed planner.
-    pub fn reading(cfg: &Config, i: usize, raw: u16) -> R<F> {
-        let Some(cal) = cfg.calibration(i) else {
-            return R::Implausible;
-        };
+    pub fn reading(cfg: &Config, raw: u16) -> R<F> {
+        let cal = cfg.calibration();
         let (far, near) = cal.window();
         if raw > cal.full_scale() {
             return R::Implausible;
@@ -192,8 +190,8 @@ impl<F: Float + FloatConst, M: Math<F>> FloatPlanner<F, M> {
     /// rad, step mm, status).
     pub fn step(&mut self, cfg: &Config, x: F, y: F, h: F, raw: &[u16; 5]) -> (F, F, Status) {
         let mut rd = [R::Clear; 5];
-        for (i, r) in rd.iter_mut().enumerate() {
-            *r = Self::reading(cfg, i, raw[i]);
+        for (r, &c) in rd.iter_mut().zip(raw) {
+            *r = Self::reading(cfg, c);
         }
         let (n150, big) = (c::<F>(150.0), c::<F>(65_535.0));
         // Fold-back filter.

@@ -1,15 +1,14 @@
 //! The ATmega328P firmware in simavr: the same commands and guard verdicts
 //! as the host core from the same recorded inputs, bit for bit; the planner
-//! step's cycle count (and the guard's, printed); the flash and RAM budgets
-//! of issue 5.
+//! step's cycle count (and the guard's, printed); the image and its RAM fit
+//! an Uno.
 //!
-//! Two budgets are not met yet and their tests are ignored with the reason
-//! (run them with `cargo test -p rover-tests --test avr_firmware -- --ignored`):
-//! the step costs tens of thousands of cycles (32-bit arithmetic compiles
-//! to long AVR sequences: a 32-bit division ~400 cycles, a square root up
-//! to ~1,200, a virtual obstacle in reach ~950; `avr_costs.rs` prints
-//! them), and the firmware is ~30 KiB of flash. What does hold while they
-//! do not: the image fits an Uno beside its bootloader.
+//! Issue 49's budgets: RAM ≤ 1.5 KiB holds. Text ≤ 24 KiB with and
+//! without `set-back`, and a step of ≤ 12,000 cycles at worst and ≤ 6,000
+//! on average, are not met, and their tests are ignored with the reason:
+//! the escape and the follower are most of the planner, and their redesign
+//! (issue 52) is blocked. `cargo test --release -p rover-tests --test
+//! avr_firmware -- --ignored --nocapture` prints where each stands.
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{
@@ -22,8 +21,13 @@ use rover_tests::{
 };
 use std::sync::OnceLock;
 
-/// Worst planner step allowed, cycles (issue 5's budget).
-const STEP_BUDGET: u32 = 8_000;
+/// Issue 49's budgets: text, bytes (with and without `set-back`).
+const TEXT_BUDGET: u32 = 24 * 1024;
+/// Data, bss and the measured stack peak, bytes.
+const RAM_BUDGET: u32 = 1_536;
+/// The replayed step's worst and mean, cycles.
+const WORST_BUDGET: u32 = 12_000;
+const MEAN_BUDGET: u32 = 6_000;
 
 /// The traces and the firmware's answers, computed once for all tests.
 fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u32) {
@@ -130,28 +134,64 @@ fn stack_bound_fits_ram(what: &str, elf: &std::path::Path, peak: u32) {
     );
 }
 
+/// The replayed step within issue 49's budget, in both builds, with the
+/// f32 build's worst step beside it.
 #[test]
-#[ignore = "not met: the step costs ~13,000 cycles on average, ~28,500 at worst (issue 5 stays open)"]
+#[ignore = "not met (issue 49, blocked): -- --ignored prints where it stands"]
 fn step_within_cycle_budget() {
-    let (_, cycles, _) = replayed();
-    let (_, worst) = mean_worst(cycles);
-    assert!(
-        worst <= STEP_BUDGET,
-        "worst step {worst} cycles > {STEP_BUDGET}"
+    let (traces, cycles, _) = replayed();
+    let (mean, worst) = mean_worst(cycles);
+    let (set_back, _) = set_back_replayed();
+    let (sb_mean, sb_worst) = mean_worst(set_back);
+    let mut float = Avr::boot_elf(&f32_step_elf());
+    let f32_cycles: Vec<u32> = traces
+        .iter()
+        .flat_map(|t| float.replay(t.goal, &t.frames))
+        .map(|r| r.cycles)
+        .collect();
+    let (_, f32_worst) = mean_worst(&f32_cycles);
+    println!(
+        "avr step budget ({WORST_BUDGET} worst, {MEAN_BUDGET} mean): worst={worst} mean={mean}, set-back worst={sb_worst} mean={sb_mean}; f32 worst={f32_worst}, {:.1} times the worst",
+        f32_worst as f64 / worst.max(1) as f64
     );
+    for (what, mean, worst) in [("", mean, worst), ("set-back ", sb_mean, sb_worst)] {
+        assert!(worst <= WORST_BUDGET, "{what}worst step {worst} cycles");
+        assert!(mean <= MEAN_BUDGET, "{what}mean step {mean} cycles");
+    }
 }
 
+/// The production image's text within issue 49's budget, with and without
+/// `set-back`.
 #[test]
-#[ignore = "not met: the firmware is ~30.3 KiB (issue 5 stays open)"]
+#[ignore = "not met (issue 49, blocked): -- --ignored prints where it stands"]
 fn flash_within_budget() {
     let (text, _, _) = elf_size(&firmware_elf());
-    assert!(text <= 16 * 1024, "flash text {text} > 16 KB");
+    let (set_back, _, _) = elf_size(&set_back_firmware_elf());
+    println!("avr text budget ({TEXT_BUDGET}): text={text}, set-back text={set_back}");
+    assert!(text <= TEXT_BUDGET, "text {text} bytes");
+    assert!(set_back <= TEXT_BUDGET, "set-back text {set_back} bytes");
+}
+
+/// The production image's data and bss and the stack peak measured while
+/// replaying (as `cargo xtask avr-report` prints them), within issue 49's
+/// budget, with and without `set-back`.
+#[test]
+fn statics_and_stack_peak_within_1_5_kib() {
+    let (_, _, peak) = replayed();
+    let (_, sb_peak) = set_back_replayed();
+    // The production images' statics, and the step's stack peak measured
+    // while replaying (the application's own frames are below it).
+    let (data, bss, used) = ram_used(&firmware_elf(), *peak);
+    let (_, _, sb_used) = ram_used(&set_back_firmware_elf(), *sb_peak);
+    println!("avr ram budget ({RAM_BUDGET}): data={data} bss={bss} stack_peak={peak}: {used}; set-back {sb_used}");
+    assert!(used <= RAM_BUDGET, "{used} bytes");
+    assert!(sb_used <= RAM_BUDGET, "set-back {sb_used} bytes");
 }
 
 /// `cargo xtask avr-size`'s parts account for the image: every code symbol
 /// is in one, and what no symbol's size covers (the vector table, the
 /// start-up's alignment) is small. The planner's share is printed: its
-/// functions and its inlined step alone are over the 16 KiB budget.
+/// functions and its inlined step alone are over the 24 KiB budget.
 #[test]
 fn flash_parts_cover_the_image() {
     let elf = firmware_elf();
@@ -174,7 +214,7 @@ fn flash_parts_cover_the_image() {
 /// the bootloader (`Ravedude.toml`: board `uno`): the code and the
 /// initial values of the data. A bigger image still links (the linker
 /// allows the whole 32 KB) and simavr runs it, but the upload to a real
-/// board fails, so this is the limit that must hold while the 16 KiB budget
+/// board fails, so this is the limit that must hold while the 24 KiB budget
 /// is not met.
 #[test]
 fn firmware_fits_an_uno_beside_its_bootloader() {
@@ -206,25 +246,35 @@ fn fits_an_uno(what: &str, elf: &std::path::Path) {
 #[test]
 fn set_back_build_replays_bit_exact_and_fits_an_uno() {
     fits_an_uno("avr set-back image", &set_back_firmware_elf());
-    let elf = set_back_replay_firmware_elf();
-    let mut avr = Avr::boot_elf(&elf);
-    let mut cycles = Vec::new();
-    for t in &standard_traces_with(AdcProfile::AVR_10BIT_5V, true) {
-        let got = avr.replay(t.goal, &t.frames);
-        assert_eq!(got.len(), t.outputs.len(), "{}: steps", t.name);
-        for (k, (r, want)) in got.iter().zip(&t.outputs).enumerate() {
-            assert_eq!(&r.answer, want, "{}: step {k}", t.name);
-            cycles.push(r.cycles);
-        }
-    }
-    let (mean, worst) = mean_worst(&cycles);
+    let (cycles, peak) = set_back_replayed();
+    let (mean, worst) = mean_worst(cycles);
     let steps = cycles.len();
-    let peak = avr.stack_peak().expect("stack peak reply");
     println!(
         "avr set-back step cycles over {steps} steps: mean={mean} worst={worst}; stack_peak={peak}"
     );
     // Its stack's bound from the call graph too, as for the shipped build.
-    stack_bound_fits_ram("avr set-back stack", &elf, peak);
+    stack_bound_fits_ram("avr set-back stack", &set_back_replay_firmware_elf(), *peak);
+}
+
+/// The set-back build's answers to the traces recorded with the sensors
+/// set back, each checked against the host core's: the steps' cycles and
+/// the stack peak, once for all tests.
+fn set_back_replayed() -> &'static (Vec<u32>, u32) {
+    static R: OnceLock<(Vec<u32>, u32)> = OnceLock::new();
+    R.get_or_init(|| {
+        let mut avr = Avr::boot_elf(&set_back_replay_firmware_elf());
+        let mut cycles = Vec::new();
+        for t in &standard_traces_with(AdcProfile::AVR_10BIT_5V, true) {
+            let got = avr.replay(t.goal, &t.frames);
+            assert_eq!(got.len(), t.outputs.len(), "{}: steps", t.name);
+            for (k, (r, want)) in got.iter().zip(&t.outputs).enumerate() {
+                assert_eq!(&r.answer, want, "{}: step {k}", t.name);
+                cycles.push(r.cycles);
+            }
+        }
+        let peak = avr.stack_peak().expect("stack peak reply");
+        (cycles, peak)
+    })
 }
 
 /// No code path of the firmware (planner-core included) can panic: the

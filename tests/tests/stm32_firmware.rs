@@ -89,6 +89,25 @@ fn board_build_within_size_budget() {
     assert!(data + bss <= 16 * 1024, "data + bss {} > 16 KB", data + bss);
 }
 
+/// Issue 49's budgets for the STM32: the worst replayed step, instructions,
+/// and the board build's text, bytes.
+const WORST_BUDGET: u32 = 2_000;
+const TEXT_BUDGET: u32 = 24 * 1024;
+
+/// The step and the image within issue 49's budgets. Not met: the escape
+/// and the follower are most of the planner, and their redesign (issue 52)
+/// is blocked.
+#[test]
+#[ignore = "not met (issue 49, blocked): -- --ignored prints where it stands"]
+fn within_issue_budgets() {
+    let (counts, _) = run();
+    let (_, worst) = mean_worst(counts);
+    let (text, _, _) = elf_size(&board_elf());
+    println!("stm32 budgets ({WORST_BUDGET} worst, {TEXT_BUDGET} text): worst={worst} text={text}");
+    assert!(worst <= WORST_BUDGET, "worst step {worst} instructions");
+    assert!(text <= TEXT_BUDGET, "text {text} bytes");
+}
+
 /// The firmware README's size command, `cargo size --release`, reads the
 /// board build's sizes as `stm32-report` does.
 #[test]

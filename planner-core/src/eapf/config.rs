@@ -39,8 +39,8 @@ pub enum ConfigError {
     Clearance,
     /// Escape parameters out of range (see [`crate::eapf::escape`]).
     Escape,
-    /// A calibration table was refused (sensor index, reason).
-    Calibration(u8, CalibrationError),
+    /// The calibration table was refused.
+    Calibration(CalibrationError),
 }
 
 /// Planner configuration. Build with [`ConfigBuilder`]; every field has the
@@ -74,7 +74,11 @@ pub struct Config {
     /// Views after an advance with one count before a sensor is frozen
     /// ([`crate::eapf::sensors::FreezeWatch`]; 0: never).
     pub(crate) frozen_views: u8,
-    pub(crate) calibration: [Calibration; SENSOR_COUNT],
+    /// The sensors' table from counts to millimetres: the five are one
+    /// model, and one table serves them all (on the AVR one instead of five
+    /// is 300 bytes of RAM). A sensor's own offset from it is corrected in
+    /// its counts before the planner reads them (`rover::calibration`).
+    pub(crate) calibration: Calibration,
     /// The sensor faces sit at least their minimum range behind the rim
     /// ([`ConfigBuilder::sensors_set_back`]). Only with the `set-back`
     /// feature: the firmwares' configuration, built without it, keeps the
@@ -125,7 +129,7 @@ impl Config {
             follow: false,
         },
         frozen_views: 0,
-        calibration: [Calibration::UNSET; SENSOR_COUNT],
+        calibration: Calibration::UNSET,
         #[cfg(feature = "set-back")]
         set_back: false,
     };
@@ -171,22 +175,18 @@ impl Config {
             .max(self.sensor_angles[4].abs_signed());
         Angle(a)
     }
-    /// The calibration of sensor `i`.
-    pub fn calibration(&self, i: usize) -> Option<&Calibration> {
-        self.calibration.get(i)
+    /// The sensors' calibration (one table for the five).
+    pub fn calibration(&self) -> &Calibration {
+        &self.calibration
     }
 
-    /// Replace the calibration of sensor `i` (a table measured on the
-    /// rover's own sensor). It must be built for the same ADC profile.
-    pub fn set_calibration(&mut self, i: usize, cal: Calibration) -> Result<(), ConfigError> {
-        let slot = self
-            .calibration
-            .get_mut(i)
-            .ok_or(ConfigError::Calibration(i as u8, CalibrationError::BadAdc))?;
-        if cal.full_scale() != slot.full_scale() {
-            return Err(ConfigError::Calibration(i as u8, CalibrationError::BadAdc));
+    /// Replace the sensors' calibration (a table measured on the rover's
+    /// own sensors). It must be built for the same ADC profile.
+    pub fn set_calibration(&mut self, cal: Calibration) -> Result<(), ConfigError> {
+        if cal.full_scale() != self.calibration.full_scale() {
+            return Err(ConfigError::Calibration(CalibrationError::BadAdc));
         }
-        *slot = cal;
+        self.calibration = cal;
         Ok(())
     }
     /// Goal tolerance, mm.
@@ -428,7 +428,7 @@ impl ConfigBuilder {
         };
         let c = match c {
             Ok(c) => c,
-            Err(e) => return Err(ConfigError::Calibration(0, e)),
+            Err(e) => return Err(ConfigError::Calibration(e)),
         };
         let half_width = self.robot_radius_mm + self.clearance_mm;
         let mut angles = [Angle::ZERO; SENSOR_COUNT];
@@ -459,7 +459,7 @@ impl ConfigBuilder {
             direct_tolerance: Angle::from_deg(self.direct_tolerance_deg),
             escape: self.escape,
             frozen_views: self.frozen_views,
-            calibration: [c; SENSOR_COUNT],
+            calibration: c,
             #[cfg(feature = "set-back")]
             set_back,
         })
@@ -563,10 +563,10 @@ mod tests {
         // Set back, the table is the one interpolated in 1/d.
         let adc = AdcProfile::AVR_10BIT_5V;
         assert_eq!(
-            c.calibration[0],
+            c.calibration,
             Calibration::gp2y0a21_reciprocal(adc).unwrap()
         );
-        assert_eq!(rim.calibration[0], Calibration::gp2y0a21(adc).unwrap());
+        assert_eq!(rim.calibration, Calibration::gp2y0a21(adc).unwrap());
     }
 
     #[test]
@@ -581,11 +581,14 @@ mod tests {
         let mut c = b().build().unwrap();
         let mine =
             Calibration::from_points(AdcProfile::AVR_10BIT_5V, &[(100, 800), (600, 100)]).unwrap();
-        c.set_calibration(4, mine).unwrap();
-        assert_eq!(c.calibration(4), Some(&mine));
+        c.set_calibration(mine).unwrap();
+        assert_eq!(c.calibration(), &mine);
         let stm = Calibration::gp2y0a21(AdcProfile::STM32_12BIT_3V3).unwrap();
-        assert!(c.set_calibration(0, stm).is_err());
-        assert!(c.set_calibration(5, mine).is_err());
+        assert_eq!(
+            c.set_calibration(stm),
+            Err(ConfigError::Calibration(CalibrationError::BadAdc))
+        );
+        assert_eq!(c.calibration(), &mine);
     }
 
     #[test]
@@ -646,7 +649,7 @@ mod tests {
         };
         assert_eq!(
             ConfigBuilder::new(bad_adc).build(),
-            Err(ConfigError::Calibration(0, CalibrationError::BadAdc))
+            Err(ConfigError::Calibration(CalibrationError::BadAdc))
         );
     }
 }

@@ -223,12 +223,8 @@ impl Planner {
         raw: &RawCounts,
         mut then: impl FnMut(usize, Reading) -> Reading,
     ) {
-        for (i, ((o, &c), cal)) in out
-            .iter_mut()
-            .zip(raw.iter())
-            .zip(config.calibration.iter())
-            .enumerate()
-        {
+        let cal = &config.calibration;
+        for (i, (o, &c)) in out.iter_mut().zip(raw.iter()).enumerate() {
             *o = then(i, cal.reading(c));
         }
     }
@@ -811,7 +807,7 @@ mod tests {
 
     /// The front sensor's first count that reads `mm` or nearer.
     fn count_for(p: &Planner, mm: u16) -> u16 {
-        let cal = p.config().calibration(2).unwrap();
+        let cal = p.config().calibration();
         (86..=532)
             .find(|&c| cal.reading(c).range_mm().unwrap_or(9_999) <= mm)
             .unwrap()
@@ -979,7 +975,7 @@ mod tests {
     #[test]
     fn obstacle_ahead_deflects_and_shortens_the_step() {
         let mut p = planner(Point::new(3_000, 0));
-        let cal = *p.config().calibration(2).unwrap();
+        let cal = *p.config().calibration();
         // An obstacle 300 mm ahead on the front sensor (count for ~300 mm).
         let c300 = count_for(&p, 300);
         let out = p.step_raw(at(0, 0, 0), &[FAR, FAR, c300, FAR, FAR]);
@@ -1101,7 +1097,7 @@ mod tests {
         // first step comes after one and a half turns, and off the heading
         // faced: checked.)
         let mut p = planner(Point::new(3_000, 0));
-        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let near = p.config().calibration().full_scale() / 2 + 100;
         assert_eq!(p.readings(&[near; 5])[2], Reading::TooClose);
         let open = |deg: f64| (225.0..=305.0).contains(&deg);
         let mut heading = Angle::ZERO;
@@ -1135,7 +1131,7 @@ mod tests {
         // (due south), and the guard lets that step go although every beam
         // still reads too close; the step after is guarded as ever.
         let mut p = planner(Point::new(0, 3_000));
-        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let near = p.config().calibration().full_scale() / 2 + 100;
         let out = p.step_raw(at(0, 0, 90), &[FAR; 5]).command;
         assert!(out.step_mm >= 400, "{out:?}");
         let mut heading = Angle::from_deg(90);
@@ -1161,7 +1157,7 @@ mod tests {
         assert_eq!(back.step_mm, 400, "back to where the run began");
         assert_eq!(p.guard_raw(&[near; 5], 400), Guard::Continue);
         // A thing the beams range in the way stops it all the same.
-        let cal = p.config().calibration(2).unwrap();
+        let cal = p.config().calibration();
         let c200 = (0..cal.full_scale())
             .find(|&c| cal.reading(c).range_mm().is_some_and(|mm| mm <= 200))
             .unwrap();
@@ -1180,7 +1176,7 @@ mod tests {
         // pocket: the way back is 3,040 mm, the back-out the sensors'
         // range of it.
         let mut p = planner(Point::new(0, 9_000));
-        let near = p.config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let near = p.config().calibration().full_scale() / 2 + 100;
         let mut y = 0;
         for _ in 0..4 {
             let out = p.step_raw(at(0, y, 90), &[FAR; 5]).command;
@@ -1217,7 +1213,7 @@ mod tests {
         // trusted.
         let after = |cycles: usize| {
             let mut p = planner(Point::new(3_000, 0));
-            let (_, near) = p.config().calibration(0).unwrap().window();
+            let (_, near) = p.config().calibration().window();
             let mut heading = Angle::ZERO;
             for _ in 0..cycles {
                 let pose = Pose {

@@ -1029,7 +1029,7 @@ mod tests {
         });
         // A wall right in front whatever the heading, and a rover that
         // never moves: the planner's escape gives up on each way in turn.
-        let near = p.planner().config().calibration(2).unwrap().full_scale() / 2 + 100;
+        let near = p.planner().config().calibration().full_scale() / 2 + 100;
         let wall = [near; 5];
         let pose = Pose::default();
         let first: heapless::Vec<Point, 4> = {
@@ -1077,7 +1077,7 @@ mod tests {
                 ..RouteConfig::default()
             };
             let mut p = RoutePlanner::new(config(), m.clone(), cfg, Point::new(0, 3_000));
-            let near = p.planner().config().calibration(2).unwrap().full_scale() / 2 + 100;
+            let near = p.planner().config().calibration().full_scale() / 2 + 100;
             let wall = [near; 5];
             let pose = Pose::default();
             let mut seen_blocked = false;

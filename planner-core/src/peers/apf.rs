@@ -215,7 +215,7 @@ mod tests {
         // the rover turns to the sector's edge: the classical trap, where
         // it turns back and forth in front of the wall.
         let mut p = apf(Point::new(1_000, 0));
-        let cal = *p.config().calibration(2).unwrap();
+        let cal = *p.config().calibration();
         let c150 = (0..1023)
             .find(|&c| cal.reading(c).range_mm().is_some_and(|mm| mm <= 150))
             .unwrap();

@@ -643,7 +643,7 @@ mod tests {
         // safety rule refuses the way and no free beam leads lower on the
         // wave.
         let mut near = clear;
-        let cal = cfg.calibration(2).unwrap();
+        let cal = cfg.calibration();
         near[2] = (0..cal.full_scale())
             .rev()
             .find(|&c| cal.reading(c) == crate::eapf::sensors::Reading::TooClose)

@@ -480,7 +480,7 @@ pub(crate) mod tests {
     pub fn counts(cfg: &Config, mm: [Option<u16>; SENSOR_COUNT]) -> RawCounts {
         let mut raw = [0; SENSOR_COUNT];
         for (i, want) in mm.iter().enumerate() {
-            let cal = cfg.calibration(i).unwrap();
+            let cal = cfg.calibration();
             raw[i] = (0..cal.full_scale())
                 .find(|&c| match (want, cal.reading(c)) {
                     (None, Reading::Clear) => true,

@@ -677,7 +677,7 @@ mod tests {
             .build()
             .unwrap();
         for c in CLEAR..CLEAR + 5 {
-            assert_eq!(cfg.calibration[0].reading(c), Reading::Clear);
+            assert_eq!(cfg.calibration.reading(c), Reading::Clear);
         }
         Planner::new(cfg, Point::new(0, 0))
     }

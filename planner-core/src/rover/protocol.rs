@@ -151,14 +151,12 @@ pub fn sensor_readings<'a>(
     cfg: &'a Config,
     raw: &'a RawCounts,
 ) -> impl Iterator<Item = SensorField> + 'a {
-    raw.iter()
-        .zip(cfg.calibration.iter())
-        .map(|(&c, cal)| match cal.reading(c) {
-            Reading::Range(mm) => SensorField::Number(mm),
-            Reading::Clear => SensorField::Sign(b'-'),
-            Reading::TooClose => SensorField::Sign(b'<'),
-            Reading::Implausible => SensorField::Sign(b'!'),
-        })
+    raw.iter().map(|&c| match cfg.calibration.reading(c) {
+        Reading::Range(mm) => SensorField::Number(mm),
+        Reading::Clear => SensorField::Sign(b'-'),
+        Reading::TooClose => SensorField::Sign(b'<'),
+        Reading::Implausible => SensorField::Sign(b'!'),
+    })
 }
 
 /// The whole reply to `D`, `\n` ended, a byte at a time to `out`: the
@@ -284,7 +282,7 @@ mod tests {
         use crate::eapf::sensors::AdcProfile;
         let adc = AdcProfile::AVR_10BIT_5V;
         let cfg = ConfigBuilder::new(adc).build().unwrap();
-        let cal = cfg.calibration(0).unwrap();
+        let cal = cfg.calibration();
         let (far, near) = cal.window();
         let mid = (far + near) / 2;
         let Reading::Range(mm) = cal.reading(mid) else {
