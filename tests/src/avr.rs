@@ -1,7 +1,7 @@
 //! The ATmega328P firmware in simavr (through avr-tester): build it, replay
 //! recorded traces through its planner, read its size.
 
-use crate::{clean_cargo, repo_root, Answer, Frame};
+use crate::{clean_cargo, repo_root, Answer, Frame, Trace};
 use avr_tester::AvrTester;
 use planner_core::{Angle, Command, Output, Point, Status};
 use std::path::PathBuf;
@@ -70,6 +70,18 @@ pub fn costs_elf() -> PathBuf {
 /// The `f32-step` bench: the same step in f32 with avr-libc's math.
 pub fn f32_step_elf() -> PathBuf {
     build("f32-step", &["f32-step"])
+}
+
+/// The cycles of each step of `traces` through the f32 build
+/// (planner-float, avr-libc's math), for the fixed-point step's to be set
+/// beside.
+pub fn f32_step_cycles(traces: &[Trace]) -> Vec<u32> {
+    let mut float = Avr::boot_elf(&f32_step_elf());
+    traces
+        .iter()
+        .flat_map(|t| float.replay(t.goal, &t.frames))
+        .map(|r| r.cycles)
+        .collect()
 }
 
 /// Section sizes of an AVR ELF: (text, data, bss), from `avr-size` (binutils

@@ -12,8 +12,8 @@
 
 use planner_core::AdcProfile;
 use rover_tests::avr::{
-    elf_size, f32_step_elf, firmware_elf, ram_used, replay_firmware_elf, set_back_firmware_elf,
-    set_back_replay_firmware_elf, Avr, RAM_BYTES,
+    elf_size, f32_step_cycles, f32_step_elf, firmware_elf, ram_used, replay_firmware_elf,
+    set_back_firmware_elf, set_back_replay_firmware_elf, Avr, Replayed, RAM_BYTES,
 };
 use rover_tests::stack_bound::stack_bound;
 use rover_tests::{
@@ -35,17 +35,15 @@ fn replayed() -> &'static (Vec<Trace>, Vec<u32>, u32) {
     R.get_or_init(|| {
         let mut avr = Avr::boot_replay();
         let traces = standard_traces(AdcProfile::AVR_10BIT_5V);
-        let (mut cycles, mut guard) = (Vec::new(), Vec::new());
-        for t in &traces {
-            let got = avr.replay(t.goal, &t.frames);
-            for (k, (r, want)) in got.iter().zip(&t.outputs).enumerate() {
-                assert_eq!(&r.answer, want, "{}: step {k}", t.name);
-                cycles.push(r.cycles);
-                if !t.frames[k].guards.is_empty() {
-                    guard.push(r.guard_cycles);
-                }
-            }
-        }
+        let got = replay_checked(&mut avr, &traces);
+        let cycles = got.iter().map(|r| r.cycles).collect();
+        let frames = traces.iter().flat_map(|t| &t.frames);
+        let guard: Vec<u32> = got
+            .iter()
+            .zip(frames)
+            .filter(|(_, f)| !f.guards.is_empty())
+            .map(|(r, _)| r.guard_cycles)
+            .collect();
         // The guard runs in the control loop, not the step: its cost
         // bounds how often the firmware can look (`GUARD_PERIOD_MS`).
         let (mean, worst) = mean_worst(&guard);
@@ -143,13 +141,7 @@ fn step_within_cycle_budget() {
     let (mean, worst) = mean_worst(cycles);
     let (set_back, _) = set_back_replayed();
     let (sb_mean, sb_worst) = mean_worst(set_back);
-    let mut float = Avr::boot_elf(&f32_step_elf());
-    let f32_cycles: Vec<u32> = traces
-        .iter()
-        .flat_map(|t| float.replay(t.goal, &t.frames))
-        .map(|r| r.cycles)
-        .collect();
-    let (_, f32_worst) = mean_worst(&f32_cycles);
+    let (_, f32_worst) = mean_worst(&f32_step_cycles(traces));
     println!(
         "avr step budget ({WORST_BUDGET} worst, {MEAN_BUDGET} mean): worst={worst} mean={mean}, set-back worst={sb_worst} mean={sb_mean}; f32 worst={f32_worst}, {:.1} times the worst",
         f32_worst as f64 / worst.max(1) as f64
@@ -263,18 +255,29 @@ fn set_back_replayed() -> &'static (Vec<u32>, u32) {
     static R: OnceLock<(Vec<u32>, u32)> = OnceLock::new();
     R.get_or_init(|| {
         let mut avr = Avr::boot_elf(&set_back_replay_firmware_elf());
-        let mut cycles = Vec::new();
-        for t in &standard_traces_with(AdcProfile::AVR_10BIT_5V, true) {
-            let got = avr.replay(t.goal, &t.frames);
-            assert_eq!(got.len(), t.outputs.len(), "{}: steps", t.name);
-            for (k, (r, want)) in got.iter().zip(&t.outputs).enumerate() {
-                assert_eq!(&r.answer, want, "{}: step {k}", t.name);
-                cycles.push(r.cycles);
-            }
-        }
+        let traces = standard_traces_with(AdcProfile::AVR_10BIT_5V, true);
+        let cycles = replay_checked(&mut avr, &traces)
+            .iter()
+            .map(|r| r.cycles)
+            .collect();
         let peak = avr.stack_peak().expect("stack peak reply");
         (cycles, peak)
     })
+}
+
+/// Each trace of `traces` replayed by `avr`, every answer the host core's:
+/// the firmware's answers, in order.
+fn replay_checked(avr: &mut Avr, traces: &[Trace]) -> Vec<Replayed> {
+    let mut all = Vec::new();
+    for t in traces {
+        let got = avr.replay(t.goal, &t.frames);
+        assert_eq!(got.len(), t.outputs.len(), "{}: steps", t.name);
+        for (k, (r, want)) in got.iter().zip(&t.outputs).enumerate() {
+            assert_eq!(&r.answer, want, "{}: step {k}", t.name);
+        }
+        all.extend(got);
+    }
+    all
 }
 
 /// No code path of the firmware (planner-core included) can panic: the

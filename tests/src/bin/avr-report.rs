@@ -4,7 +4,7 @@
 //! of each, measured now, nothing typed in.
 
 use planner_core::AdcProfile;
-use rover_tests::avr::{elf_size, f32_step_elf, firmware_elf, Avr};
+use rover_tests::avr::{elf_size, f32_step_cycles, firmware_elf, Avr};
 use rover_tests::{mean_worst, mode_lines, standard_traces};
 
 fn main() {
@@ -23,14 +23,7 @@ fn main() {
         .stack_peak()
         .map_or_else(|| "unknown".into(), |p| p.to_string());
     let (mean, worst) = mean_worst(&cycles);
-    // The same steps through the f32 build (planner-float, avr-libc math).
-    let mut float = Avr::boot_elf(&f32_step_elf());
-    let f32_cycles: Vec<u32> = traces
-        .iter()
-        .flat_map(|t| float.replay(t.goal, &t.frames))
-        .map(|r| r.cycles)
-        .collect();
-    let (_, f32_worst) = mean_worst(&f32_cycles);
+    let (_, f32_worst) = mean_worst(&f32_step_cycles(&traces));
     println!("avr size: text={text} data={data} bss={bss} stack_peak={peak}");
     println!("avr step cycles: mean={mean} worst={worst} f32_worst={f32_worst}");
     for line in mode_lines("avr", &traces, &cycles) {
