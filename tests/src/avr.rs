@@ -14,8 +14,11 @@ pub const F_CPU: u32 = 16_000_000;
 static BUILT: Mutex<Vec<(String, PathBuf)>> = Mutex::new(Vec::new());
 
 /// Build one binary of firmware-avr (release) with `features` once per
-/// process. Each set of features has its own target folder, so that the
-/// builds of one binary do not overwrite each other's ELF.
+/// process. The builds share one target folder (the host tools that
+/// avr-device's build script compiles are hundreds of megabytes, built
+/// once), and cargo copies each set of features' binaries into a folder of
+/// its own (`--artifact-dir`), so that the builds of one binary do not
+/// overwrite each other's ELF.
 fn build(bin: &'static str, features: &[&str]) -> PathBuf {
     let key = format!("{bin} {}", features.join(","));
     let mut built = BUILT.lock().unwrap_or_else(|e| e.into_inner());
@@ -23,19 +26,19 @@ fn build(bin: &'static str, features: &[&str]) -> PathBuf {
         return p.clone();
     }
     let dir = repo_root().join("firmware-avr");
-    let target = match features {
-        [] => "target".to_string(),
-        f => format!("target/{}", f.join("+")),
+    let artifacts = match features {
+        [] => "target/elf/default".to_string(),
+        f => format!("target/elf/{}", f.join("+")),
     };
     let mut cmd = clean_cargo(&dir);
     cmd.args(["build", "--release", "--quiet", "--bin", bin]);
-    cmd.args(["--target-dir", &target]);
+    cmd.args(["-Z", "unstable-options", "--artifact-dir", &artifacts]);
     if !features.is_empty() {
         cmd.args(["--features", &features.join(",")]);
     }
     let status = cmd.status().expect("run cargo for firmware-avr");
     assert!(status.success(), "firmware-avr build of {bin} failed");
-    let elf = dir.join(format!("{target}/avr-none/release/{bin}.elf"));
+    let elf = dir.join(format!("{artifacts}/{bin}.elf"));
     built.push((key, elf.clone()));
     elf
 }
