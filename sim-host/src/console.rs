@@ -11,7 +11,8 @@ use crate::scenario::Scenario;
 use crate::sim::{Outcome, RunResult, TraceRow};
 use crate::units::to_rad;
 pub use planner_core::rover::app::Look;
-use planner_core::Angle;
+use planner_core::rover::calibration::{Correction, Source};
+use planner_core::{Angle, Status};
 use std::sync::atomic::{AtomicBool, Ordering};
 
 /// A line link to the rover.
@@ -34,16 +35,16 @@ pub struct Record {
     pub y_mm: i16,
     /// Heading, binary angle units (65,536 = 360°).
     pub heading: u16,
-    /// `M`, `A`, `U` or `F`.
-    pub status: char,
+    /// What the planner answered.
+    pub status: Status,
     /// Commanded heading, binary angle units.
     pub cmd_heading: u16,
     /// Commanded step, mm.
     pub step_mm: u16,
     /// The step's cycles on the rover.
     pub cycles: u32,
-    /// The sensors' calibration: `C`, `-` or `!`.
-    pub cal: char,
+    /// Which calibration the counts went through.
+    pub cal: Source,
     /// The counts the planner read for the step.
     pub counts: [u16; 5],
     /// The guard's looks during the advance before the step that changed
@@ -73,6 +74,12 @@ fn five(fields: &[&str]) -> Option<[u16; 5]> {
     v.try_into().ok()
 }
 
+/// The `K` line that gives sensor `sensor` the correction `k` (`K sensor
+/// gain_q8 offset`, `planner_core::rover::protocol`), without its `\n`.
+pub fn calibration_line(sensor: u8, k: Correction) -> String {
+    format!("K {sensor} {} {}", k.gain_q8, k.offset)
+}
+
 /// The CSV log's header.
 pub const CSV_HEADER: &str =
     "ms,x_mm,y_mm,heading_deg,status,cmd_heading_deg,step_mm,cycles,calibration,c0,c1,c2,c3,c4";
@@ -88,9 +95,10 @@ impl Record {
         let [t, ms, x, y, h, s, ch, st, cy, cal, counts @ ..] = f.as_slice() else {
             return None;
         };
-        let one = |s: &str| {
-            let mut c = s.chars();
-            c.next().filter(|_| c.next().is_none())
+        // A field of one letter.
+        let one = |s: &str| match s.as_bytes() {
+            &[b] => Some(b),
+            _ => None,
         };
         (*t == "T").then_some(())?;
         Some(Record {
@@ -98,11 +106,11 @@ impl Record {
             x_mm: x.parse().ok()?,
             y_mm: y.parse().ok()?,
             heading: h.parse().ok()?,
-            status: one(s).filter(|c| "MAUF".contains(*c))?,
+            status: Status::from_letter(one(s)?)?,
             cmd_heading: ch.parse().ok()?,
             step_mm: st.parse().ok()?,
             cycles: cy.parse().ok()?,
-            cal: one(cal).filter(|c| "C-!".contains(*c))?,
+            cal: Source::from_letter(one(cal)?)?,
             counts: five(counts)?,
             looks: Vec::new(),
         })
@@ -117,11 +125,11 @@ impl Record {
             self.x_mm,
             self.y_mm,
             degrees(self.heading),
-            self.status,
+            char::from(self.status.letter()),
             degrees(self.cmd_heading),
             self.step_mm,
             self.cycles,
-            self.cal,
+            char::from(self.cal.letter()),
             c[0],
             c[1],
             c[2],
@@ -137,10 +145,10 @@ impl Record {
             f64::from(goal.1) - f64::from(self.y_mm),
         );
         let what = match self.status {
-            'M' => "moving",
-            'A' => "arrived",
-            'U' => "unreachable",
-            _ => "sensor fault",
+            Status::Moving => "moving",
+            Status::Arrived => "arrived",
+            Status::Unreachable => "unreachable",
+            Status::SensorFault => "sensor fault",
         };
         format!(
             "t {:7.2} s  at ({:6}, {:6}) mm  {:6.1}°  {:5.2} m to go  step {:4} mm  {what}",
@@ -233,10 +241,10 @@ pub fn drive(
         let status = r.status;
         records.push(r);
         let end = match status {
-            'A' => End::Arrived,
-            'U' => End::Unreachable,
-            'F' => End::SensorFault,
-            _ => continue,
+            Status::Arrived => End::Arrived,
+            Status::Unreachable => End::Unreachable,
+            Status::SensorFault => End::SensorFault,
+            Status::Moving => continue,
         };
         return Ok((records, end));
     }
@@ -262,7 +270,6 @@ pub struct Replay {
 /// logged pose and counts, after the logged guard looks before it.
 pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -> Replay {
     use crate::units::to_v2;
-    use planner_core::rover::app::status_letter;
     use planner_core::{Planner, Point, Pose};
     let mut planner = Planner::new(cfg, Point::new(goal.0, goal.1));
     let mut out = Replay::default();
@@ -279,7 +286,7 @@ pub fn replay(cfg: planner_core::Config, goal: (i16, i16), records: &[Record]) -
         let step = planner.step_raw(pose, &r.counts);
         let same = step.command.heading.0 == r.cmd_heading
             && step.command.step_mm == r.step_mm
-            && char::from(status_letter(step.status)) == r.status;
+            && step.status == r.status;
         if !same {
             out.differ.push(i);
         }
@@ -387,7 +394,16 @@ mod tests {
         let r = Record::parse("T 1234 -50 300 16384 M 32768 120 15012 C 57 60 204 58 59").unwrap();
         assert_eq!(
             (r.ms, r.x_mm, r.y_mm, r.heading, r.status, r.step_mm, r.cycles, r.cal),
-            (1234, -50, 300, 16_384, 'M', 120, 15_012, 'C')
+            (
+                1234,
+                -50,
+                300,
+                16_384,
+                Status::Moving,
+                120,
+                15_012,
+                Source::Stored
+            )
         );
         assert_eq!(r.counts, [57, 60, 204, 58, 59]);
         assert_eq!(

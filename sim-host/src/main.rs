@@ -483,7 +483,10 @@ fn calibrate(sensor: u8, adc: Adc, counts: &[u16]) -> Result<String, String> {
             datasheet_row(adc)
         )
     })?;
-    Ok(format!("K {sensor} {} {}\n", k.gain_q8, k.offset))
+    Ok(format!(
+        "{}\n",
+        sim_host::console::calibration_line(sensor, k)
+    ))
 }
 
 fn real_main(cli: Cli) -> Result<(), String> {

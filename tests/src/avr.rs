@@ -570,15 +570,15 @@ fn drive_mounted(
         }
         // Telemetry.
         while let Some(line) = r.take_line() {
-            let f: Vec<&str> = line.split_whitespace().collect();
-            if f.first() == Some(&"T") {
-                steps += 1;
-                match f.get(5).copied() {
-                    Some("A") => break 'run LoopOutcome::Reached,
-                    Some("U") => break 'run LoopOutcome::Unreachable,
-                    Some("F") => break 'run LoopOutcome::SensorFault,
-                    _ => {}
-                }
+            let Some(t) = sim_host::console::Record::parse(&line) else {
+                continue;
+            };
+            steps += 1;
+            match t.status {
+                Status::Arrived => break 'run LoopOutcome::Reached,
+                Status::Unreachable => break 'run LoopOutcome::Unreachable,
+                Status::SensorFault => break 'run LoopOutcome::SensorFault,
+                Status::Moving => {}
             }
         }
     };

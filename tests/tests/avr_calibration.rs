@@ -4,10 +4,11 @@
 //! the telemetry. The firmware runs in simavr, reset as a power cycle
 //! resets it (its EEPROM kept).
 
-use planner_core::rover::calibration::{datasheet_row, fit, STORED_BYTES};
+use planner_core::rover::calibration::{datasheet_row, fit, Source, STORED_BYTES};
 use planner_core::AdcProfile;
 use rover_tests::avr::firmware_elf;
 use rover_tests::profile::Bare;
+use sim_host::console::{calibration_line, Record};
 
 const ADC: AdcProfile = AdcProfile::AVR_10BIT_5V;
 
@@ -18,17 +19,16 @@ fn readings(d: &str) -> Vec<String> {
     f[6..].iter().map(|s| s.to_string()).collect()
 }
 
-/// The calibration letter of the next telemetry line after `G`.
-fn telemetry_flag(avr: &mut Bare) -> String {
+/// The calibration of the next telemetry line after `G`, as it says.
+fn telemetry_flag(avr: &mut Bare) -> Source {
     assert_eq!(avr.request("G 3000 0"), "OK");
     let t = loop {
-        let l = avr.line();
-        if l.starts_with("T ") {
-            break l;
+        if let Some(t) = Record::parse(&avr.line()) {
+            break t;
         }
     };
     assert_eq!(avr.request("S"), "OK");
-    t.split(' ').nth(9).unwrap().to_string()
+    t.cal
 }
 
 /// Every sensor sees a card at 200 mm, and sensor 2 reads 20 % high there
@@ -55,17 +55,14 @@ fn a_calibration_is_stored_and_survives_a_power_cycle() {
     );
     assert_eq!(
         telemetry_flag(&mut avr),
-        "-",
+        Source::Datasheet,
         "none stored: the datasheet's"
     );
 
     // Its correction, as the console fits it from the card's counts.
     let row = datasheet_row(ADC).map(|c| (u32::from(c) * 120 / 100) as u16);
     let k = fit(ADC, &row).unwrap();
-    assert_eq!(
-        avr.request(&format!("K 2 {} {}", k.gain_q8, k.offset)),
-        "OK"
-    );
+    assert_eq!(avr.request(&calibration_line(2, k)), "OK");
     assert_eq!(avr.request("K 2 900 0"), "ERR", "no sensor needs that gain");
     let after = readings(&avr.request("D"));
     assert!(mm(&after, 2).abs_diff(200) <= 10, "{after:?}");
@@ -81,7 +78,7 @@ fn a_calibration_is_stored_and_survives_a_power_cycle() {
     assert_eq!(avr.reset(), "READY");
     card_at_200_mm(&mut avr);
     assert_eq!(readings(&avr.request("D")), after);
-    assert_eq!(telemetry_flag(&mut avr), "C");
+    assert_eq!(telemetry_flag(&mut avr), Source::Stored);
 
     // A corrupt copy: the datasheet's curve, flagged.
     let mut bad = stored.clone();
@@ -90,5 +87,5 @@ fn a_calibration_is_stored_and_survives_a_power_cycle() {
     assert_eq!(avr.reset(), "READY");
     card_at_200_mm(&mut avr);
     assert_eq!(readings(&avr.request("D")), before);
-    assert_eq!(telemetry_flag(&mut avr), "!");
+    assert_eq!(telemetry_flag(&mut avr), Source::Corrupt);
 }

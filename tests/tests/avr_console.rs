@@ -7,10 +7,27 @@ use rover_tests::avr::EmulatedRover;
 use rover_tests::scenario;
 use sim_host::console::{drive, picture, replay, End, Plan, Record, CSV_HEADER};
 use sim_host::geom::V2;
+use sim_host::scenario::Scenario;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+/// The emulated rover booted at the start of the built-in scenario
+/// `path` (sensor noise `seed`), and the console's plan for it.
+fn start(path: &str, seed: u64) -> (Scenario, EmulatedRover, Plan) {
+    let sc = scenario(path);
+    let (rover, pose) = EmulatedRover::new(&sc, seed, None, false);
+    let plan = plan(&sc, &pose);
+    (sc, rover, plan)
+}
+
+/// The host's core configured as the firmware, for the replay of its log.
+fn firmware_config() -> planner_core::Config {
+    planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
+        .build()
+        .unwrap()
+}
+
 /// The console's plan for `sc` from the pose line the rover starts at.
-fn plan(sc: &sim_host::scenario::Scenario, pose: &str) -> Plan {
+fn plan(sc: &Scenario, pose: &str) -> Plan {
     let p: Vec<i16> = pose
         .split(' ')
         .skip(1)
@@ -25,9 +42,7 @@ fn plan(sc: &sim_host::scenario::Scenario, pose: &str) -> Plan {
 
 #[test]
 fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
-    let sc = scenario("paper/env1-ex1.toml");
-    let (mut rover, pose) = EmulatedRover::new(&sc, 1, None, false);
-    let plan = plan(&sc, &pose);
+    let (sc, mut rover, plan) = start("paper/env1-ex1.toml", 1);
     let stop = AtomicBool::new(false);
     let mut shown = Vec::new();
     let (records, end) = drive(&mut rover, plan, &stop, |r| {
@@ -44,12 +59,14 @@ fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
     let rows: Vec<String> = records.iter().map(Record::csv_row).collect();
     assert_eq!(CSV_HEADER.split(',').count(), rows[0].split(',').count());
     assert!(records.windows(2).all(|w| w[0].ms < w[1].ms));
-    assert_eq!(records[0].cal, '-', "no calibration stored");
+    assert_eq!(
+        records[0].cal,
+        planner_core::rover::calibration::Source::Datasheet,
+        "no calibration stored"
+    );
     // The log replayed through the host's core, configured as the
     // firmware: every step decided alike, bit for bit.
-    let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
-        .build()
-        .unwrap();
+    let cfg = firmware_config();
     let replayed = replay(cfg, plan.goal, &records);
     assert_eq!(replayed.differ, Vec::<usize>::new());
     // The picture: the world behind the odometry's path, how it ended, and
@@ -72,9 +89,7 @@ fn the_console_drives_the_emulated_rover_to_its_goal_and_draws_it() {
 
 #[test]
 fn a_stop_from_the_console_stops_the_rover() {
-    let sc = scenario("paper/env1-ex1.toml");
-    let (mut rover, pose) = EmulatedRover::new(&sc, 2, None, false);
-    let plan = plan(&sc, &pose);
+    let (_, mut rover, plan) = start("paper/env1-ex1.toml", 2);
     let stop = AtomicBool::new(false);
     // Ctrl-C at the first step.
     let (records, end) = drive(&mut rover, plan, &stop, |_| {
@@ -104,9 +119,7 @@ fn a_stop_from_the_console_stops_the_rover() {
 /// firmware did; with the looks or the counts changed, it does not.
 #[test]
 fn a_logged_run_replays_bit_for_bit_with_its_guard_looks() {
-    let sc = scenario("traps/u-trap.toml");
-    let (mut rover, pose) = EmulatedRover::new(&sc, 3, None, false);
-    let plan = plan(&sc, &pose);
+    let (sc, mut rover, plan) = start("traps/u-trap.toml", 3);
     let stop = AtomicBool::new(false);
     let (records, end) = drive(&mut rover, plan, &stop, |_| {}).unwrap();
     assert_eq!(end, End::Arrived);
@@ -116,9 +129,7 @@ fn a_logged_run_replays_bit_for_bit_with_its_guard_looks() {
         records.len()
     );
     assert!(looks > 0, "no look changed the flank points");
-    let cfg = planner_core::ConfigBuilder::new(planner_core::AdcProfile::AVR_10BIT_5V)
-        .build()
-        .unwrap();
+    let cfg = firmware_config();
     let replayed = replay(cfg, plan.goal, &records);
     assert_eq!(replayed.differ, Vec::<usize>::new());
     assert!(

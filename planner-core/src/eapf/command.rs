@@ -65,6 +65,29 @@ impl Status {
             _ => None,
         }
     }
+
+    /// Its letter in the telemetry line (`crate::rover::protocol`): `M`
+    /// moving, `A` arrived, `U` unreachable, `F` sensor fault.
+    pub fn letter(self) -> u8 {
+        match self {
+            Status::Moving => b'M',
+            Status::Arrived => b'A',
+            Status::Unreachable => b'U',
+            Status::SensorFault => b'F',
+        }
+    }
+
+    /// The status of a [`Status::letter`]; `None` for any other byte.
+    pub fn from_letter(letter: u8) -> Option<Status> {
+        [
+            Status::Moving,
+            Status::Arrived,
+            Status::Unreachable,
+            Status::SensorFault,
+        ]
+        .into_iter()
+        .find(|s| s.letter() == letter)
+    }
 }
 
 /// A rule of the step that an [`Output`] broke ([`Output::broken_rule`]).
@@ -497,8 +520,15 @@ mod tests {
             Status::SensorFault,
         ] {
             assert_eq!(Status::from_code(s.code()), Some(s));
+            assert_eq!(Status::from_letter(s.letter()), Some(s));
         }
         assert_eq!(Status::from_code(4), None);
+        assert_eq!(Status::from_letter(b'X'), None);
+        let letters: std::vec::Vec<u8> = (0..4)
+            .filter_map(Status::from_code)
+            .map(Status::letter)
+            .collect();
+        assert_eq!(letters, b"MAUF");
     }
 
     use crate::eapf::config::test_config as cfg;

@@ -479,8 +479,8 @@ pub(crate) mod tests {
     /// Counts that read `mm` from the face on every sensor (`None`: clear).
     pub fn counts(cfg: &Config, mm: [Option<u16>; SENSOR_COUNT]) -> RawCounts {
         let mut raw = [0; SENSOR_COUNT];
+        let cal = cfg.calibration();
         for (i, want) in mm.iter().enumerate() {
-            let cal = cfg.calibration();
             raw[i] = (0..cal.full_scale())
                 .find(|&c| match (want, cal.reading(c)) {
                     (None, Reading::Clear) => true,

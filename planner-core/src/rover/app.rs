@@ -26,7 +26,7 @@ use crate::eapf::Planner;
 use crate::fixed::{Angle, Point, Pose};
 use crate::rover::calibration::{Corrections, Source, STORED_BYTES};
 use crate::rover::drive::{Body, Executor, ExecutorConfig, Odometry, Wheels};
-use crate::rover::protocol::{self, LineReader, Request};
+use crate::rover::protocol::{self, write_counts, write_field, LineReader, Request};
 use core::sync::atomic::{compiler_fence, Ordering};
 
 /// The two motors.
@@ -447,14 +447,6 @@ fn write_look(out: &mut dyn FnMut(u8), look: &Look) {
     out(b'\n');
 }
 
-/// Five counts, each after a space.
-#[inline(never)]
-fn write_counts(out: &mut dyn FnMut(u8), counts: &RawCounts) {
-    for &c in counts {
-        write_field(out, c.into());
-    }
-}
-
 /// The counts the planner reads for the sensors' `raw` counts: through
 /// each sensor's own calibration, if there is one.
 fn planner_counts(tables: &Corrections, source: Source, raw: &RawCounts) -> RawCounts {
@@ -494,22 +486,6 @@ fn write_bytes(board: &mut impl Serial, bytes: &[u8]) {
     }
 }
 
-/// The status's letter in the telemetry line.
-pub fn status_letter(s: Status) -> u8 {
-    match s {
-        Status::Moving => b'M',
-        Status::Arrived => b'A',
-        Status::Unreachable => b'U',
-        Status::SensorFault => b'F',
-    }
-}
-
-/// A space, then `v` in decimal.
-fn write_field(out: &mut dyn FnMut(u8), v: u32) {
-    out(b' ');
-    protocol::write_number(v, out);
-}
-
 /// `T <ms> <x_mm> <y_mm> <heading> <status> <cmd_heading> <step_mm> <cycles> <cal> <c0> … <c4>`
 /// ([`protocol`]), a byte at a time to `out`.
 fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source, counts: &RawCounts) {
@@ -523,7 +499,7 @@ fn write_telemetry(out: &mut dyn FnMut(u8), step: &Step, cal: Source, counts: &R
     }
     write_field(out, step.pose.heading.0.into());
     out(b' ');
-    out(status_letter(step.output.status));
+    out(step.output.status.letter());
     write_field(out, command.heading.0.into());
     write_field(out, command.step_mm.into());
     write_field(out, step.cycles);
@@ -682,12 +658,17 @@ mod tests {
         Planner::new(cfg, Point::new(0, 0))
     }
 
-    /// The telemetry lines' status letters.
-    fn statuses(sent: &str) -> String {
+    /// Field `n` of each telemetry line in `sent`.
+    fn telemetry_fields(sent: &str, n: usize) -> std::vec::Vec<&str> {
         sent.lines()
             .filter(|l| l.starts_with("T "))
-            .map(|l| l.split(' ').nth(5).unwrap())
+            .map(|l| l.split(' ').nth(n).unwrap())
             .collect()
+    }
+
+    /// The telemetry lines' status letters.
+    fn statuses(sent: &str) -> String {
+        telemetry_fields(sent, 5).concat()
     }
 
     fn steps(events: &[Event]) -> Vec<Step> {
@@ -910,13 +891,9 @@ mod tests {
         board.send("G 3000 0\n");
         let until = board.ms + 200;
         board.run(rover, until, false);
-        let mut letters: Vec<char> = board
-            .sent()
-            .lines()
-            .filter(|l| l.starts_with("T "))
-            .filter_map(|l| l.split(' ').nth(9)?.chars().next())
-            .collect();
+        let sent = board.sent();
+        let mut letters = telemetry_fields(&sent, 9);
         letters.dedup();
-        letters.into_iter().collect()
+        letters.concat()
     }
 }

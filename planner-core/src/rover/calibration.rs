@@ -114,6 +114,13 @@ impl Source {
             Source::Corrupt => b'!',
         }
     }
+
+    /// The source of a [`Source::letter`]; `None` for any other byte.
+    pub fn from_letter(letter: u8) -> Option<Source> {
+        [Source::Datasheet, Source::Stored, Source::Corrupt]
+            .into_iter()
+            .find(|s| s.letter() == letter)
+    }
 }
 
 /// Why a measurement, a correction or a stored copy was refused.
@@ -295,6 +302,14 @@ mod tests {
     /// A unit whose counts are `percent` of the datasheet's, plus `plus`.
     fn unit(percent: u32, plus: i32) -> Row {
         datasheet_row(ADC).map(|c| (i32::from(c) * percent as i32 / 100 + plus) as u16)
+    }
+
+    #[test]
+    fn sources_round_trip_through_their_letters() {
+        for s in [Source::Datasheet, Source::Stored, Source::Corrupt] {
+            assert_eq!(Source::from_letter(s.letter()), Some(s));
+        }
+        assert_eq!(Source::from_letter(b'M'), None);
     }
 
     #[test]

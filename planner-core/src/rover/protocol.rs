@@ -165,10 +165,7 @@ pub fn sensor_readings<'a>(
 /// `raw` itself without one).
 pub fn write_sensor_line(cfg: &Config, raw: &RawCounts, read: &RawCounts, out: &mut dyn FnMut(u8)) {
     out(b'D');
-    for &c in raw {
-        out(b' ');
-        write_number(c.into(), out);
-    }
+    write_counts(out, raw);
     for f in sensor_readings(cfg, read) {
         out(b' ');
         match f {
@@ -200,6 +197,20 @@ pub fn write_number(v: u32, out: &mut dyn FnMut(u8)) {
             break;
         }
         p /= 10;
+    }
+}
+
+/// A space, then `v` in decimal: one field of a line.
+pub fn write_field(out: &mut dyn FnMut(u8), v: u32) {
+    out(b' ');
+    write_number(v, out);
+}
+
+/// Five counts, each a field ([`write_field`]).
+#[inline(never)]
+pub fn write_counts(out: &mut dyn FnMut(u8), counts: &RawCounts) {
+    for &c in counts {
+        write_field(out, c.into());
     }
 }
 
